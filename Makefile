@@ -1,0 +1,35 @@
+# planthub — every target sets up what it needs on a machine with only Python 3.11, gcc and make.
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+SCENARIO ?= scenarios/belt_bottle_sensor.yaml
+
+.PHONY: run test bench fmus venv clean clean-venv
+
+run: $(STAMP)
+	$(PY) -m hub run $(SCENARIO)
+
+test: $(STAMP) fmus
+	$(PY) -m pytest
+
+bench: $(STAMP) fmus
+	$(PY) -m tests.bench
+
+fmus: $(STAMP)
+	@if [ -f fmus/Makefile ]; then $(MAKE) --no-print-directory -C fmus PYTHON=$(abspath $(PY)) BUILD=$(abspath build/fmus); fi
+
+venv: $(STAMP)
+
+# The environment is rebuilt whenever the pins change.
+$(STAMP): requirements.txt pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --disable-pip-version-check -r requirements.txt
+	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps -e .
+	touch $@
+
+clean:
+	rm -rf build runs .pytest_cache
+
+clean-venv: clean
+	rm -rf $(VENV)

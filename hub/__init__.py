@@ -1,0 +1,1 @@
+"""planthub: a co-simulation hub for automation plants."""

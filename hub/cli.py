@@ -1,0 +1,142 @@
+"""Command line: `python -m hub run|validate|describe`."""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import yaml
+
+from .errors import PlanthubError, Problem, ScenarioError
+from .master import Master
+from .plant import Plant
+from .recorder import Recorder
+from .registry import UnknownModule, default_registry
+from .scenario import Scenario, load_scenario
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="planthub", description="Co-simulation hub for automation plants.")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    run = sub.add_parser("run", help="run a scenario headless and record it")
+    run.add_argument("scenario", type=Path)
+    run.add_argument("--out", type=Path, help="folder for recording.csv and events.csv (default: runs/<name>)")
+    _add_set(run)
+
+    check = sub.add_parser("validate", help="check a scenario without running it")
+    check.add_argument("scenario", type=Path)
+    _add_set(check)
+
+    describe = sub.add_parser("describe", help="list a module's parameters and slots (no name: list modules)")
+    describe.add_argument("module", nargs="?")
+
+    args = parser.parse_args(argv)
+    try:
+        return {"run": _run, "validate": _validate, "describe": _describe}[args.command](args)
+    except ScenarioError as exc:
+        print(f"planthub: {exc}", file=sys.stderr)
+        return 2
+    except PlanthubError as exc:
+        print(f"planthub: {exc}", file=sys.stderr)
+        return 1
+
+
+def _add_set(parser) -> None:
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                        help="override a scenario value, e.g. --set run.physics_rate=1000 (value read as YAML)")
+
+
+def _overrides(args) -> dict:
+    out = {}
+    for item in args.overrides:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise ScenarioError([Problem("--set", None, "", f"expected KEY=VALUE, got {item!r}")])
+        out[key] = yaml.safe_load(value)
+    return out
+
+
+def _load(args) -> Scenario:
+    return load_scenario(args.scenario, _overrides(args))
+
+
+def _validate(args) -> int:
+    scenario = _load(args)
+    run = scenario.run
+    print(f"{args.scenario}: ok — {len(scenario.objects)} objects, {len(scenario.flows)} flows, "
+          f"{len(scenario.record)} recorded slots, {run.end_tick / run.physics_rate:g} s at {run.physics_rate} Hz")
+    return 0
+
+
+def _run(args) -> int:
+    scenario = _load(args)
+    out = args.out or Path("runs") / scenario.name
+    columns = []
+    with Plant(scenario) as plant:
+        columns = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
+        recorder = Recorder(columns, scenario.run.physics_rate, out)
+        try:
+            result = Master(plant, recorder).run(progress=_Progress() if sys.stderr.isatty() else None)
+        finally:
+            recorder.close()
+    _summary(scenario, result, recorder, out)
+    return 0
+
+
+class _Progress:
+    """A one-line progress display on a terminal, redrawn at most twice a second."""
+
+    def __init__(self):
+        self.shown = self.started = time.monotonic()
+
+    def __call__(self, tick: int, end: int) -> None:
+        now = time.monotonic()
+        if now - self.shown >= 0.5 or tick >= end:
+            self.shown = now
+            print(f"\r  {100 * tick / end:5.1f} %  {now - self.started:6.1f} s wall", end="", file=sys.stderr)
+            if tick >= end:
+                print(file=sys.stderr)
+
+
+def _summary(scenario: Scenario, result, recorder: Recorder, out: Path) -> None:
+    run = scenario.run
+    print(f"planthub run {scenario.name}  ({scenario.path})")
+    print(f"  simulated    {result.sim_seconds:.3f} s  ({result.ticks} ticks at {run.physics_rate} Hz, "
+          f"communication step {1000 * run.substeps / run.physics_rate:.4g} ms)")
+    print(f"  wall time    {result.wall_seconds:.3f} s  (real-time factor {result.realtime_factor:.1f}×)")
+    total = sum(s.count for s in recorder.stats.values())
+    print(f"  events       {total}")
+    width = max((len(k) for k in recorder.stats), default=0)
+    for slot, stats in recorder.stats.items():
+        detail = f"  ({stats.first_detail})" if stats.first_detail else ""
+        print(f"    {slot:<{width}}  {stats.count:>4}×  first at {stats.first_tick / run.physics_rate:.4f} s{detail}")
+    print(f"  recording    {out / 'recording.csv'}  ({len(scenario.record)} slots)")
+    print(f"  event log    {out / 'events.csv'}")
+
+
+def _describe(args) -> int:
+    registry = default_registry()
+    if not args.module:
+        for name in registry.names():
+            doc = (registry.get(name).__doc__ or "").strip().splitlines()
+            print(f"{name:<16} {doc[0] if doc else ''}")
+        return 0
+    try:
+        module = registry.get(args.module)
+    except UnknownModule as exc:
+        print(f"planthub: {exc}", file=sys.stderr)
+        return 2
+    print(f"{args.module}: {(module.__doc__ or '').strip()}")
+    print("\nparameters:")
+    props = module.PARAMETERS.get("properties", {})
+    required = set(module.PARAMETERS.get("required", []))
+    for name, schema in props.items():
+        default = "required" if name in required else f"default {schema['default']!r}" if "default" in schema else "optional"
+        print(f"  {name:<14} {default:<18} {schema.get('description', '')}")
+    print("\nslots:")
+    for comp, slots in module.slots(module.with_defaults({})).items():
+        for slot in slots:
+            print(f"  {comp + '.' + slot.name:<22} {slot.type.value:<7} {slot.direction.value:<7} {slot.doc}")
+    return 0

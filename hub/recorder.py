@@ -1,0 +1,86 @@
+"""Writes recorded slots (one CSV row per communication point) and the event log while a run goes."""
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .signals import Signals
+from .slots import SlotRef, SlotType
+
+_SUFFIXES = {SlotType.VEC3: ("x", "y", "z"), SlotType.QUAT: ("x", "y", "z", "w")}
+
+
+def _cell(kind: SlotType, value, active: bool):
+    if kind is SlotType.VOID:
+        return ("1" if active else "0",)
+    if kind is SlotType.BOOL:
+        return ("1" if value else "0",)
+    if kind is SlotType.REAL:
+        return (repr(value),)
+    if kind in _SUFFIXES:
+        return tuple(repr(v) for v in value)
+    return (str(value),)
+
+
+@dataclass
+class EventStats:
+    count: int = 0
+    first_tick: int | None = None
+    first_detail: str = ""
+
+
+@dataclass
+class Recorder:
+    """Streams `recording.csv` and `events.csv` into `directory` (or only counts, without one).
+
+    recording.csv: a `time` column in seconds, then one column per recorded slot (vec3 and quat
+    slots take one column per component, `slot.x` …); void slots show 1 in steps where they were
+    active, bool slots 1/0; reals are written with every digit, so equal runs give equal files.
+    events.csv: `time,tick,slot,detail`, one row per event in order of the physics tick.
+    """
+
+    columns: list[tuple[SlotRef, SlotType, int]]
+    rate: int
+    directory: Path | None = None
+    stats: dict[str, EventStats] = field(default_factory=dict)
+
+    def __post_init__(self):
+        self._files = []
+        self._rows = self._events = None
+        if self.directory is not None:
+            self.directory.mkdir(parents=True, exist_ok=True)
+            self._rows = self._open("recording.csv")
+            header = ["time"]
+            for ref, kind, _ in self.columns:
+                header += [f"{ref}.{s}" for s in _SUFFIXES[kind]] if kind in _SUFFIXES else [str(ref)]
+            csv.writer(self._files[-1], quoting=csv.QUOTE_ALL, lineterminator="\n").writerow(header)
+            self._events = self._open("events.csv")
+            self._events.writerow(["time", "tick", "slot", "detail"])
+
+    def _open(self, name: str):
+        handle = open(self.directory / name, "w", newline="", encoding="utf-8")
+        self._files.append(handle)
+        return csv.writer(handle, lineterminator="\n")
+
+    def sample(self, tick: int, signals: Signals) -> None:
+        if self._rows is None:
+            return
+        row = [repr(tick / self.rate)]
+        values, active = signals.values, signals.active
+        for _, kind, i in self.columns:
+            row.extend(_cell(kind, values[i], active[i]))
+        self._rows.writerow(row)
+
+    def event(self, tick: int, slot: str, detail: str) -> None:
+        stats = self.stats.setdefault(slot, EventStats())
+        if stats.first_tick is None:
+            stats.first_tick, stats.first_detail = tick, detail
+        stats.count += 1
+        if self._events is not None:
+            self._events.writerow([repr(tick / self.rate), tick, slot, detail])
+
+    def close(self) -> None:
+        for handle in self._files:
+            handle.close()
+        self._files = []

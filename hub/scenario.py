@@ -1,0 +1,299 @@
+"""Loads a scenario file and checks all of it before anything is built; every problem is reported at once."""
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import jsonschema
+
+from . import flowgraph
+from .errors import Problem, ScenarioError
+from .flow import Condition, Mode
+from .module import Module
+from .registry import Registry, UnknownModule, default_registry, did_you_mean
+from .slots import Direction, Slot, SlotRef, SlotType
+from .yamlsource import Lines, format_path, line_of, load_yaml
+
+SCHEMAS = Path(__file__).resolve().parent.parent / "schemas"
+_SLOT_REF = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*){1,2}$")
+
+
+def _is_ref(value) -> bool:
+    return isinstance(value, str) and bool(_SLOT_REF.match(value))
+
+
+def _dict(value) -> dict:
+    return value if isinstance(value, dict) else {}
+
+
+def _list(value) -> list:
+    return value if isinstance(value, list) else []
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    physics_rate: int        # ticks per second
+    substeps: int            # physics ticks per communication step
+    end_tick: int            # a whole number of communication steps
+    seed: int
+
+    @property
+    def dt(self) -> float:
+        return 1.0 / self.physics_rate
+
+
+@dataclass(frozen=True)
+class ObjectSpec:
+    name: str
+    module: type[Module]
+    module_name: str
+    params: dict             # with defaults filled in
+
+
+@dataclass(frozen=True)
+class FlowSpec:
+    source: SlotRef
+    target: SlotRef
+    type: SlotType
+    condition: Condition
+    mode: Mode
+    rearm: SlotRef | None
+    line: int | None
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A checked scenario: everything the plant builder needs, nothing left to validate."""
+
+    path: Path
+    name: str
+    description: str
+    run: RunSettings
+    objects: tuple[ObjectSpec, ...]
+    flows: tuple[FlowSpec, ...]
+    record: tuple[tuple[SlotRef, SlotType], ...]
+    order: tuple[tuple[str, object], ...]   # evaluation order of flows and feedthrough components
+
+
+def load_scenario(path, overrides: dict | None = None, registry: Registry | None = None) -> Scenario:
+    """Read, override (dotted keys, e.g. {"run.physics_rate": 1000}), check and return a scenario."""
+    path = Path(path)
+    data, lines, problems = load_yaml(path)
+    if data is None:
+        raise ScenarioError(problems)
+    problems += _apply_overrides(data, overrides or {}, str(path))
+    checker = _Checker(path, data, lines, registry or default_registry())
+    checker.problems[:0] = problems
+    return checker.check()
+
+
+def _apply_overrides(data, overrides: dict, file: str) -> list[Problem]:
+    problems = []
+    for key, value in overrides.items():
+        parts = key.split(".")
+        node = data
+        for part in parts[:-1]:
+            if not isinstance(node, dict):
+                break
+            node = node.setdefault(part, {})
+        if not isinstance(node, dict):
+            problems.append(Problem(file, None, key, "override does not name a mapping entry"))
+        else:
+            node[parts[-1]] = value
+    return problems
+
+
+def _scenario_schema() -> dict:
+    return json.loads((SCHEMAS / "scenario.schema.json").read_text())
+
+
+class _Checker:
+    """Collects every problem of one scenario, each with file, line and path."""
+
+    def __init__(self, path: Path, data, lines: Lines, registry: Registry):
+        self.file = str(path)
+        self.path = path
+        self.data = data
+        self.lines = lines
+        self.registry = registry
+        self.problems: list[Problem] = []
+        self.broken: set[str] = set()
+
+    def problem(self, path: tuple, message: str) -> None:
+        self.problems.append(Problem(self.file, line_of(self.lines, path), format_path(path), message))
+
+    def check(self) -> Scenario:
+        """Check shape (JSON Schema) and meaning together, so one run reports every problem.
+
+        Parts the schema already rejected are skipped by the meaning checks, not judged twice.
+        """
+        self.validate(self.data, _scenario_schema(), ())
+        if not isinstance(self.data, dict):
+            raise ScenarioError(self.problems)
+        return self.build()
+
+    def validate(self, data, schema: dict, at: tuple) -> None:
+        validator = jsonschema.Draft202012Validator(schema)
+        for error in sorted(validator.iter_errors(data), key=lambda e: [str(p) for p in e.absolute_path]):
+            where = at + tuple(error.absolute_path)
+            if error.validator == "additionalProperties":
+                known = error.schema.get("properties", {})
+                for key in sorted(set(error.instance) - set(known)):
+                    self.problem(where + (key,), f"unknown key {key!r}{did_you_mean(key, known)}")
+            elif error.validator == "required":
+                self.problem(where, error.message.replace("is a required property", "is missing"))
+            else:
+                self.problem(where, error.message)
+
+    # --- meaning --------------------------------------------------------------------------
+    def build(self) -> Scenario:
+        data = self.data
+        run = self.run_settings(_dict(data.get("run")))
+        objects, slot_tables = self.objects(_dict(data.get("objects")))
+        flows = self.flows(_list(data.get("flows")), slot_tables)
+        record = self.record(_list(data.get("record")), slot_tables)
+        order = self.order(flows, objects)
+        if self.problems:
+            raise ScenarioError(self.problems)
+        return Scenario(self.path, data.get("name", self.path.stem), data.get("description", ""),
+                        run, tuple(objects), tuple(flows), tuple(record), order)
+
+    def run_settings(self, run: dict) -> RunSettings:
+        def number(key, default, kind=(int, float)):
+            value = run.get(key, default)
+            ok = isinstance(value, kind) and not isinstance(value, bool) and value > 0
+            return value if ok else default
+        rate = number("physics_rate", 150, int)
+        run = {"duration": number("duration", 10), "seed": number("seed", 0, int),
+               **({"communication_step": run["communication_step"]} if number("communication_step", None) else {})}
+        substeps = 1
+        if "communication_step" in run:
+            exact = run["communication_step"] * rate
+            substeps = round(exact)
+            if substeps < 1 or not math.isclose(exact, substeps, rel_tol=1e-9, abs_tol=1e-9):
+                lo, hi = max(1, math.floor(exact)), max(1, math.ceil(exact))
+                self.problem(("run", "communication_step"),
+                             f"{run['communication_step']} s is not a whole number of physics ticks at "
+                             f"{rate} Hz (nearest: {lo / rate:.6g} s = {lo} ticks, {hi / rate:.6g} s = {hi} ticks)")
+                substeps = lo
+        ticks = round(run.get("duration", 10) * rate)
+        end = max(1, math.ceil(ticks / substeps)) * substeps
+        return RunSettings(rate, substeps, end, run.get("seed", 0))
+
+    def objects(self, specs: dict):
+        objects, tables, ids = [], {}, {}
+        for name, spec in specs.items():
+            at = ("objects", name)
+            if not isinstance(spec, dict) or not isinstance(spec.get("module"), str):
+                continue
+            try:
+                module = self.registry.get(spec["module"])
+            except UnknownModule as exc:
+                self.problem(at + ("module",), str(exc))
+                continue
+            params = {k: v for k, v in spec.items() if k != "module"}
+            before = len(self.problems)
+            self.validate(params, module.PARAMETERS, at)
+            if len(self.problems) > before:
+                continue
+            params = module.with_defaults(params)
+            for where, message in module.check(params):
+                self.problem(at + where, message)
+            if "id" in params:
+                if params["id"] in ids:
+                    self.problem(at + ("id",), f"duplicate id {params['id']!r} (also used by object {ids[params['id']]!r})")
+                ids.setdefault(params["id"], name)
+            objects.append(ObjectSpec(name, module, spec["module"], params))
+            tables[name] = {(comp, s.name): s for comp, slots in module.slots(params).items() for s in slots}
+        self.broken = set(specs) - set(tables)   # objects already reported: their slots are not judged
+        return objects, tables
+
+    def resolve(self, text: str, at: tuple, tables: dict, direction: Direction | None):
+        """`obj.comp.slot` or `obj.slot` → (SlotRef, Slot), or None with a problem recorded."""
+        parts = text.split(".")
+        obj = parts[0]
+        if obj not in tables:
+            if obj not in self.broken:
+                self.problem(at, f"unknown object {obj!r} in {text!r}{did_you_mean(obj, tables)}")
+            return None
+        table = tables[obj]
+        if len(parts) == 3:
+            key = (parts[1], parts[2])
+            found = [key] if key in table else []
+        else:
+            found = [k for k in table if k[1] == parts[1]]
+        if len(found) > 1:
+            options = ", ".join(f"{obj}.{c}.{s}" for c, s in found)
+            self.problem(at, f"{text!r} is ambiguous: name the component ({options})")
+            return None
+        if not found:
+            asked = ".".join(parts[1:])
+            names = [f"{c}.{s}" for c, s in table] + sorted({s for _, s in table})
+            self.problem(at, f"object {obj!r} ({self.module_of(obj)}) has no slot {asked!r}{did_you_mean(asked, names)}")
+            return None
+        (comp, name), = found
+        slot: Slot = table[(comp, name)]
+        ref = SlotRef(obj, comp, name)
+        if direction is not None and slot.direction is not direction:
+            role = "read from" if direction is Direction.SOURCE else "written to"
+            self.problem(at, f"{ref} is a {slot.direction.value} slot and cannot be {role} here")
+            return None
+        return ref, slot
+
+    def module_of(self, obj: str) -> str:
+        return self.data["objects"][obj]["module"]
+
+    def flows(self, specs: list, tables: dict) -> list[FlowSpec]:
+        out = []
+        for i, spec in enumerate(specs):
+            at = ("flows", i)
+            if not (isinstance(spec, dict) and _is_ref(spec.get("from")) and _is_ref(spec.get("to"))):
+                continue
+            if spec.get("mode", "continuous") not in ("continuous", "singular") or \
+                    spec.get("when", "source") not in ("source", "target", "both", "either"):
+                continue
+            src = self.resolve(spec["from"], at + ("from",), tables, Direction.SOURCE)
+            tgt = self.resolve(spec["to"], at + ("to",), tables, Direction.TARGET)
+            mode = Mode(spec.get("mode", "continuous"))
+            rearm = None
+            if _is_ref(spec.get("rearm")):
+                r = self.resolve(spec["rearm"], at + ("rearm",), tables, Direction.SOURCE)
+                if r and r[1].type is not SlotType.VOID:
+                    self.problem(at + ("rearm",), f"re-arm slot {r[0]} must be void, not {r[1].type.value}")
+                elif r and mode is not Mode.SINGULAR:
+                    self.problem(at + ("rearm",), "only a singular flow can be re-armed (add mode: singular)")
+                rearm = r[0] if r else None
+            if src and tgt and src[1].type is not tgt[1].type:
+                self.problem(at, f"type mismatch: {src[0]} is {src[1].type.value} but {tgt[0]} is {tgt[1].type.value}")
+            elif src and tgt:
+                out.append(FlowSpec(src[0], tgt[0], src[1].type, Condition(spec.get("when", "source")),
+                                    mode, rearm, line_of(self.lines, at)))
+        return out
+
+    def record(self, specs: list, tables: dict):
+        out = []
+        for i, text in enumerate(specs):
+            if not _is_ref(text):
+                continue
+            r = self.resolve(text, ("record", i), tables, None)
+            if r:
+                out.append((r[0], r[1].type))
+        return out
+
+    def order(self, flows: list[FlowSpec], objects: list[ObjectSpec]):
+        feed = []
+        for spec in objects:
+            for comp, pairs in spec.module.feedthrough(spec.params).items():
+                key = f"{spec.name}.{comp}"
+                feed.append(flowgraph.Feedthrough(
+                    key, frozenset(f"{key}.{t}" for t, _ in pairs), frozenset(f"{key}.{s}" for _, s in pairs)))
+        edges = [flowgraph.FlowEdge(str(f.source), str(f.target), str(f.rearm) if f.rearm else None) for f in flows]
+        plan = flowgraph.plan(edges, feed)
+        for loop in plan.loops:
+            steps = "; ".join(f"line {flows[i].line}: {flows[i].source} → {flows[i].target}" for i in loop)
+            self.problems.append(Problem(self.file, flows[loop[0]].line, "flows",
+                                         f"flows form a zero-delay loop ({steps}); break it with a component that delays"))
+        return plan.order
