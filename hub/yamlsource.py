@@ -42,8 +42,9 @@ class _Reader:
         self.problems: list[Problem] = []
         self._scalars = SafeConstructor()
 
-    def value(self, node, path: tuple):
-        self.lines[path] = node.start_mark.line + 1
+    def value(self, node, path: tuple, line: int | None = None):
+        # A mapping entry is placed at its key's line, which is where a reader looks for it.
+        self.lines[path] = line or node.start_mark.line + 1
         if isinstance(node, yaml.MappingNode):
             out = {}
             for key_node, value_node in node.value:
@@ -54,7 +55,7 @@ class _Reader:
                         self.file, key_node.start_mark.line + 1, format_path(path + (key,)),
                         f"duplicate name {key!r} (first defined at line {first})"))
                     continue
-                out[key] = self.value(value_node, path + (key,))
+                out[key] = self.value(value_node, path + (key,), key_node.start_mark.line + 1)
             return out
         if isinstance(node, yaml.SequenceNode):
             return [self.value(item, path + (i,)) for i, item in enumerate(node.value)]
