@@ -1,0 +1,24 @@
+"""Helpers for tests: run a scenario file end to end."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from hub.master import Master
+from hub.plant import Plant
+from hub.recorder import Recorder
+from hub.scenario import load_scenario
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def run_scenario(path, out: Path | None = None, overrides: dict | None = None):
+    """Load, build and run a scenario; return (scenario, recorder, result)."""
+    scenario = load_scenario(path, overrides)
+    with Plant(scenario) as plant:
+        columns = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
+        recorder = Recorder(columns, scenario.run.physics_rate, out)
+        try:
+            result = Master(plant, recorder).run()
+        finally:
+            recorder.close()
+    return scenario, recorder, result
