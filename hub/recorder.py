@@ -11,9 +11,9 @@ from .slots import SlotRef, SlotType
 _SUFFIXES = {SlotType.VEC3: ("x", "y", "z"), SlotType.QUAT: ("x", "y", "z", "w")}
 
 
-def _cell(kind: SlotType, value, active: bool):
+def _cell(kind: SlotType, value, fired: bool):
     if kind is SlotType.VOID:
-        return ("1" if active else "0",)
+        return ("1" if fired else "0",)
     if kind is SlotType.BOOL:
         return ("1" if value else "0",)
     if kind is SlotType.REAL:
@@ -40,7 +40,7 @@ class Recorder:
     events.csv: `time,tick,slot,detail`, one row per event in order of the physics tick.
     """
 
-    columns: list[tuple[SlotRef, SlotType, int]]
+    columns: list[tuple[SlotRef, SlotType, int]]   # (slot, type, index in the plant's Signals)
     rate: int
     directory: Path | None = None
     stats: dict[str, EventStats] = field(default_factory=dict)
@@ -67,9 +67,9 @@ class Recorder:
         if self._rows is None:
             return
         row = [repr(tick / self.rate)]
-        values, active = signals.values, signals.active
+        values = signals.values
         for _, kind, i in self.columns:
-            row.extend(_cell(kind, values[i], active[i]))
+            row.extend(_cell(kind, values[i], signals.fired(i)))
         self._rows.writerow(row)
 
     def event(self, tick: int, slot: str, detail: str) -> None:

@@ -16,6 +16,7 @@ class Signals:
         self.slots = slots
         self.values = [s.type.initial() for s in slots]
         self._active_at_start = [s.direction is Direction.TARGET for s in slots]
+        self._is_target = list(self._active_at_start)
         self._none_updated = [False] * len(slots)
         self.active = list(self._active_at_start)
         self.updated = list(self._none_updated)
@@ -30,3 +31,7 @@ class Signals:
         if value is not None:
             self.values[index] = value
         self.active[index] = True
+
+    def fired(self, index: int) -> bool:
+        """Whether the slot carried something in this step: a source emitted, a target was fed."""
+        return self.updated[index] if self._is_target[index] else self.active[index]
