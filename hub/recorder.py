@@ -35,8 +35,8 @@ class Recorder:
     """Streams `recording.csv` and `events.csv` into `directory` (or only counts, without one).
 
     recording.csv: a `time` column in seconds, then one column per recorded slot (vec3 and quat
-    slots take one column per component, `slot.x` …); void slots show 1 in steps where they were
-    active, bool slots 1/0; reals are written with every digit, so equal runs give equal files.
+    slots take one column per component, `slot.x` …); a void source shows 1 in steps where it
+    fired, a void target 1 in steps where a flow fed it; bool slots 1/0; reals are written with every digit, so equal runs give equal files.
     events.csv: `time,tick,slot,detail`, one row per event in order of the physics tick.
     """
 

@@ -82,5 +82,5 @@ def test_cli_run_prints_the_enter_time_in_its_summary(tmp_path):
     line = next(l for l in proc.stdout.splitlines() if "barrier.trigger.on_enter" in l)
     shown = float(line.split("first at")[1].split()[0])
     assert shown == pytest.approx(expected, rel=0.01)
-    assert "real-time factor" in proc.stdout and "simulated    4.000 s" in proc.stdout
+    assert "real-time factor" in proc.stdout and "simulated    3.500 s" in proc.stdout
     assert proc.stderr == ""
