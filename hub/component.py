@@ -25,11 +25,15 @@ class Component:
         self.name = name
         self.signals: Signals | None = None
         self.index: dict[str, int] = {}
+        self.needed: frozenset[str] = frozenset()
 
-    def bind(self, signals: Signals, index: dict[str, int]) -> None:
-        """Attach the plant's state object and this component's slot numbers (slot name → index)."""
+    def bind(self, signals: Signals, index: dict[str, int], needed: frozenset[str]) -> None:
+        """Attach the plant's state object, this component's slot numbers (slot name → index) and
+        the names of its sources that something reads (a flow, the recording): a component may
+        skip computing the others, so a scene pays only for what it uses."""
         self.signals = signals
         self.index = index
+        self.needed = needed
 
     def sense(self, tick: int) -> None:
         """Write this step's source values (step 1 of the loop)."""

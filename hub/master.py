@@ -42,7 +42,12 @@ class Master:
         self.plant = plant
         self.world = plant.world
         self.recorder = recorder or Recorder([], plant.scenario.run.physics_rate)
-        self._emitters = [c for c in plant.components if _may_emit(c)]
+        comps = plant.components
+        # Only components that do something in a hook are called: a scene of 100 bottles should
+        # not pay 200 empty calls per communication step.
+        self._sensing = [c for c in comps if type(c).sense is not Component.sense]
+        self._actuating = [c for c in comps if type(c).actuate is not Component.actuate]
+        self._emitters = [c for c in comps if _may_emit(c)]
         self._communicated = False
 
     @property
@@ -53,7 +58,7 @@ class Master:
         """One communication point at the current tick (steps 1–5 above)."""
         signals, tick = self.plant.signals, self.world.tick
         signals.begin_step()
-        for comp in self.plant.components:
+        for comp in self._sensing:
             comp.sense(tick)
         for evaluate in self.plant.plan:
             evaluate()
@@ -64,7 +69,7 @@ class Master:
         events.sort(key=lambda e: e[0])   # stable: same-tick events keep component order
         for t, slot, detail in events:
             self.recorder.event(t, slot, detail)
-        for comp in self.plant.components:
+        for comp in self._actuating:
             comp.actuate()
         self.recorder.sample(tick, signals)
         self._communicated = True

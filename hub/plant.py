@@ -30,8 +30,11 @@ class Plant:
                     slots.append(slot)
                 local_indices.append(local)
             self.signals = Signals(slots)
+            read = {f.source for f in scenario.flows} | {f.rearm for f in scenario.flows if f.rearm}
+            read |= {ref for ref, _ in scenario.record}
             for comp, local in zip(self.components, local_indices):
-                comp.bind(self.signals, local)
+                needed = frozenset(r.slot for r in read if (r.obj, r.component) == (comp.obj, comp.name))
+                comp.bind(self.signals, local, needed)
             self.flows = [
                 Flow(self.index[f.source], self.index[f.target], f.condition, f.mode,
                      self.index[f.rearm] if f.rearm else None)

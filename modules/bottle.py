@@ -7,6 +7,9 @@
 | body.velocity    | vec3   | source | linear velocity, m/s, every step                |
 | body.tilt        | real   | source | angle between its axis and the plumb line, deg  |
 | tag.id           | string | source | the id an ID reader reads, every step           |
+
+Body slots are computed only when a flow or the recording reads them: a bottle nobody watches
+costs its physics and nothing more.
 """
 from __future__ import annotations
 
@@ -33,11 +36,15 @@ class BottleBody(Component):
         self.body = body
 
     def sense(self, tick):
-        w, b = self.world, self.body
-        self.emit("position", tuple(w.positions[b].tolist()))
-        self.emit("orientation", tuple(w.orientations[b].tolist()))
-        self.emit("velocity", tuple(w.velocities[b].tolist()))
-        self.emit("tilt", math.degrees(w.tilt(b)))
+        w, b, needed = self.world, self.body, self.needed
+        if "position" in needed:
+            self.emit("position", tuple(w.positions[b].tolist()))
+        if "orientation" in needed:
+            self.emit("orientation", tuple(w.orientations[b].tolist()))
+        if "velocity" in needed:
+            self.emit("velocity", tuple(w.velocities[b].tolist()))
+        if "tilt" in needed:
+            self.emit("tilt", math.degrees(w.tilt(b)))
 
 
 class Tag(Component):
@@ -48,7 +55,8 @@ class Tag(Component):
         self.ident = ident
 
     def sense(self, tick):
-        self.emit("id", self.ident)
+        if self.needed:
+            self.emit("id", self.ident)
 
 
 class Bottle(Module):

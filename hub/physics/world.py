@@ -118,29 +118,35 @@ class PhysicsWorld:
         self.start()
         for _ in range(substeps):
             bodies, forces = self.fields.forces(self.positions, self.velocities, self.masses)
-            for n, force in zip(bodies.tolist(), forces.tolist()):
+            positions = self.positions[bodies].tolist()
+            for n, force, at in zip(bodies.tolist(), forces.tolist(), positions):
                 # A world-frame force must be applied at the body's position, or it adds a torque.
-                self._call(
-                    pybullet.applyExternalForce, self._bodies[n], -1, force,
-                    self.positions[n].tolist(), pybullet.WORLD_FRAME,
-                )
-            self._call(pybullet.stepSimulation)
+                pybullet.applyExternalForce(self._bodies[n], -1, force, at, pybullet.WORLD_FRAME,
+                                            physicsClientId=self._client)
+            pybullet.stepSimulation(physicsClientId=self._client)
             self.tick += 1
             self._read_state()
             self.triggers.evaluate(self.tick, self.positions, self.radii, self.half_heights)
 
+    def step_engine_only(self, substeps: int) -> None:
+        """Only pybullet's own stepping, no state reads, fields or triggers: the floor for benchmarks."""
+        self.start()
+        for _ in range(substeps):
+            self._call(pybullet.stepSimulation)
+        self.tick += substeps
+
     def _read_state(self) -> None:
-        n = len(self._bodies)
-        if self.positions.shape[0] != n:
-            self.positions = np.zeros((n, 3))
-            self.orientations = np.zeros((n, 4))
-            self.velocities = np.zeros((n, 3))
-        for i, body in enumerate(self._bodies):
-            pos, orn = self._call(pybullet.getBasePositionAndOrientation, body)
-            lin, _ = self._call(pybullet.getBaseVelocity, body)
-            self.positions[i] = pos
-            self.orientations[i] = orn
-            self.velocities[i] = lin
+        # One position and one velocity query per body; per-body calls cannot be batched in
+        # pybullet, so keep the Python around them minimal and build the arrays in one go.
+        client, bodies = self._client, self._bodies
+        if not bodies:
+            return
+        pose = pybullet.getBasePositionAndOrientation
+        velocity = pybullet.getBaseVelocity
+        poses = [pose(b, physicsClientId=client) for b in bodies]
+        self.positions = np.array([p for p, _ in poses])
+        self.orientations = np.array([o for _, o in poses])
+        self.velocities = np.array([velocity(b, physicsClientId=client)[0] for b in bodies])
 
     def tilt(self, body: int) -> float:
         """Angle in radians between the body's axis and the plumb line."""

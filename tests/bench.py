@@ -1,0 +1,103 @@
+"""`make bench`: speed against error, and the hub's cost next to its floor, measured in one run.
+
+Benchmarks report; they assert nothing. Each figure is the median of several repeats, and each
+hub figure stands beside its floor (bare pybullet stepping of the same bodies) from the same
+run, because this 2-core machine is noisy: read the ratios.
+"""
+from __future__ import annotations
+
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from hub.master import Master
+from hub.plant import Plant
+from hub.recorder import Recorder
+from hub.scenario import load_scenario
+
+from .helpers import ROOT
+from .test_belt_bottle_sensor import analytical_enter_time
+
+BELT = ROOT / "scenarios" / "belt_bottle_sensor.yaml"
+REPEATS = 5
+
+
+def timed(fn) -> float:
+    samples = []
+    for _ in range(REPEATS):
+        start = time.perf_counter()
+        fn()
+        samples.append(time.perf_counter() - start)
+    return statistics.median(samples)
+
+
+def hub_run(scenario, out: Path | None):
+    def go():
+        with Plant(scenario) as plant:
+            cols = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
+            recorder = Recorder(cols, scenario.run.physics_rate, out)
+            try:
+                Master(plant, recorder).run()
+            finally:
+                recorder.close()
+            return recorder
+    return go
+
+
+def floor_run(scenario):
+    def go():
+        with Plant(scenario) as plant:
+            plant.world.step_engine_only(scenario.run.end_tick)
+    return go
+
+
+def rate_sweep() -> None:
+    print("## Physics rate: speed against error (belt_bottle_sensor, 3.5 s simulated)\n")
+    print("| physics rate | k·dt | enter-time error | hub real-time factor | bare pybullet real-time factor | hub / bare |")
+    print("|---:|---:|---:|---:|---:|---:|")
+    for rate, k in [(60, 16.0), (150, 16.0), (300, 16.0), (1000, 16.0), (60, 150.0)]:
+        scenario = load_scenario(BELT, {"run.physics_rate": rate, "objects.belt.k": k})
+        expected = analytical_enter_time(scenario)
+        recorder = hub_run(scenario, None)()
+        measured = recorder.stats["barrier.trigger.on_enter"].first_tick / rate
+        hub = timed(hub_run(scenario, None))
+        bare = timed(floor_run(scenario))
+        sim = scenario.run.end_tick / rate
+        print(f"| {rate} Hz | {k / rate:.3f} | {100 * (measured - expected) / expected:+.3f} % "
+              f"| {sim / hub:.0f}× | {sim / bare:.0f}× | {hub / bare:.2f} |")
+
+
+def bottle_scaling() -> None:
+    print("\n## Cost per physics tick with N bottles on one belt (150 Hz, 10 s simulated)\n")
+    print("| bottles | hub µs/tick | bare pybullet µs/tick | hub / bare | hub real-time factor |")
+    print("|---:|---:|---:|---:|---:|")
+    for n in (1, 10, 50, 100):
+        with tempfile.TemporaryDirectory() as tmp:
+            path = Path(tmp) / "line.yaml"
+            spacing = 0.08
+            bottles = "\n".join(
+                f"  b{i}: {{module: bottle, position: [{0.04 + i * spacing:.3f}, 0, 0]}}" for i in range(n))
+            path.write_text(
+                "planthub: 1\nrun: {duration: 10, physics_rate: 150}\nobjects:\n"
+                f"  belt: {{module: conveyor, position: [0, 0, 0], length: {n * spacing + 6:.2f}, speed: 0.5}}\n"
+                f"  gate: {{module: light_barrier, position: [{n * spacing + 1:.2f}, 0, 0.05]}}\n"
+                + bottles + "\n")
+            scenario = load_scenario(path)
+        ticks = scenario.run.end_tick
+        hub = timed(hub_run(scenario, None))
+        bare = timed(floor_run(scenario))
+        print(f"| {n} | {1e6 * hub / ticks:.0f} | {1e6 * bare / ticks:.0f} | {hub / bare:.2f} "
+              f"| {scenario.run.end_tick / scenario.run.physics_rate / hub:.1f}× |")
+
+
+def main() -> int:
+    print(f"planthub benchmark — median of {REPEATS} runs each, Python {sys.version.split()[0]}\n")
+    rate_sweep()
+    bottle_scaling()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
