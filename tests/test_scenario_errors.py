@@ -222,3 +222,25 @@ def test_override_that_breaks_the_schema_is_reported(write_scenario):
         """)
     found, _ = problems(path, {"run.physics_rate": 0})
     assert found == [f"{path}:1: run.physics_rate: 0 is less than the minimum of 1"]
+
+
+def test_empty_file(write_scenario):
+    path = write_scenario("# nothing here\n")
+    found, _ = problems(path)
+    assert found == [f"{path}:1: the file is empty"]
+
+
+def test_top_level_must_be_a_mapping(write_scenario):
+    path = write_scenario("- planthub: 1\n")
+    found, _ = problems(path)
+    assert found == [f"{path}:1: [{{'planthub': 1}}] is not of type 'object'"]
+
+
+def test_override_into_a_non_mapping_is_named(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        objects:
+          bottle: {module: bottle, position: [0, 0, 0]}
+        """)
+    found, _ = problems(path, {"objects.bottle.position.x": 1})
+    assert found == [f"{path}: objects.bottle.position.x: override does not name a mapping entry"]
