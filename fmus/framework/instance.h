@@ -17,8 +17,6 @@ typedef enum {
     PHASE_ERROR = 16 /* a call returned error; only get, terminate, reset and free remain */
 } Phase;
 
-#define PHASES_ANY (PHASE_INSTANTIATED | PHASE_INITIALIZATION | PHASE_STEP | PHASE_TERMINATED | PHASE_ERROR)
-
 /* Everything one instance owns; nothing lives in globals, so instances in one
    process are independent. */
 typedef struct Instance {
@@ -40,7 +38,7 @@ void instance_free(Instance *inst);
 bool instance_allows(Instance *inst, const char *fn, unsigned allowed);
 
 /* fmi2Reset / fmi3Reset: back to the state right after instantiation. */
-Status instance_reset(Instance *inst, const char *fn);
+Status instance_reset(Instance *inst);
 
 Status instance_enter_initialization(Instance *inst, const char *fn, double start_time);
 

@@ -21,25 +21,12 @@ static void deliver(const LogTarget *target, const char *instance_name, Status s
     target->deliver(target, instance_name, status, LOG_CATEGORY_NAMES[category], message);
 }
 
-void log_to(const LogTarget *target, const char *instance_name, Status status, LogCategory category,
-            const char *format, ...)
+void log_error_to(const LogTarget *target, const char *instance_name, const char *format, ...)
 {
     va_list args;
 
     va_start(args, format);
-    deliver(target, instance_name, status, category, format, args);
-    va_end(args);
-}
-
-void log_message(const Instance *inst, LogCategory category, Status status, const char *format, ...)
-{
-    va_list args;
-
-    if (!inst->log_enabled[category]) {
-        return;
-    }
-    va_start(args, format);
-    deliver(&inst->log_target, inst->name, status, category, format, args);
+    deliver(target, instance_name, STATUS_ERROR, LOG_STATUS_ERROR, format, args);
     va_end(args);
 }
 

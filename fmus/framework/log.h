@@ -27,13 +27,8 @@ typedef struct LogTarget {
     void *environment; /* the importer's componentEnvironment / instanceEnvironment */
 } LogTarget;
 
-/* Deliver unconditionally; for messages before an instance exists. */
-void log_to(const LogTarget *target, const char *instance_name, Status status, LogCategory category,
-            const char *format, ...) PRINTF_LIKE(5, 6);
-
-/* Deliver if the category is enabled for this instance. */
-void log_message(const struct Instance *inst, LogCategory category, Status status, const char *format, ...)
-    PRINTF_LIKE(4, 5);
+/* An error before there is an instance to hold the log settings (instantiation). */
+void log_error_to(const LogTarget *target, const char *instance_name, const char *format, ...) PRINTF_LIKE(3, 4);
 
 /* Log under logStatusError and return STATUS_ERROR, for `return log_error(...)`. */
 Status log_error(const struct Instance *inst, const char *format, ...) PRINTF_LIKE(2, 3);

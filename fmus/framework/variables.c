@@ -1,6 +1,7 @@
 /* Typed, checked access to model variables by value reference. */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "owned_string.h"
 #include "variables.h"
