@@ -128,15 +128,16 @@ def _describe(args) -> int:
     except UnknownModule as exc:
         print(f"planthub: {exc}", file=sys.stderr)
         return 2
-    print(f"{args.module}: {(module.__doc__ or '').strip()}")
+    print(f"{args.module}: {(sys.modules[module.__module__].__doc__ or module.__doc__ or '').strip()}")
     print("\nparameters:")
     props = module.PARAMETERS.get("properties", {})
     required = set(module.PARAMETERS.get("required", []))
     for name, schema in props.items():
         default = "required" if name in required else f"default {schema['default']!r}" if "default" in schema else "optional"
         print(f"  {name:<14} {default:<18} {schema.get('description', '')}")
-    print("\nslots:")
-    for comp, slots in module.slots(module.with_defaults({})).items():
-        for slot in slots:
-            print(f"  {comp + '.' + slot.name:<22} {slot.type.value:<7} {slot.direction.value:<7} {slot.doc}")
+    slots = [(comp, slot) for comp, group in module.slots(module.with_defaults({})).items() for slot in group]
+    if slots:
+        print("\nslots:")
+    for comp, slot in slots:
+        print(f"  {comp + '.' + slot.name:<22} {slot.type.value:<7} {slot.direction.value:<7} {slot.doc}")
     return 0

@@ -13,7 +13,8 @@ class Component:
     Step hooks, called by the master in this order each communication step:
     `sense(tick)` writes sources from the world; `react()` (only for components that declare
     `FEEDTHROUGH`) computes sources from targets while flows are evaluated; `actuate()` reads
-    targets and applies them to the world.
+    targets and applies them to the world; `step(t, h)` advances a logic component (an FMU)
+    over the communication step, before the physics does.
     """
 
     SLOTS: ClassVar[tuple[Slot, ...]] = ()
@@ -43,6 +44,12 @@ class Component:
 
     def actuate(self) -> None:
         """Apply this step's target values to the world (step 4 of the loop)."""
+
+    def step(self, t: float, h: float) -> None:
+        """Advance own logic from t to t + h; its new outputs are sensed at the next point."""
+
+    def close(self) -> None:
+        """Release what the component holds (FMU instances, processes)."""
 
     def events(self, tick: int) -> Iterator[tuple[int, str, str]]:
         """Event-log rows `(tick, slot, detail)` for this step: by default every active void source."""

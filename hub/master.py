@@ -29,12 +29,13 @@ class Master:
     """Runs the step loop of DESIGN.md. At every communication point, in this order:
 
     1. every component senses: physics-side sources are written (triggers latched since the
-       last point, poses, velocities);
+       last point, poses, velocities; logic outputs from the last logic step);
     2. flows and connectors are evaluated in the order fixed at load time;
-    3. (logic components, FMUs and processes, step here: a later stage)
-    4. every component actuates: targets are applied to the world;
-    5. the row for this point is recorded and the events of the step logged;
-    then the world advances by the communication step's physics substeps.
+    3. every component actuates: targets are applied to the world;
+    4. the row for this point is recorded and the events of the step logged;
+    then, to reach the next point, 5. logic components (FMUs) step from t to t + h with the
+    inputs flows gave them at t (Jacobi: their outputs appear at the next point), and 6. the
+    world runs the communication step's physics substeps.
     Time is the physics tick count; seconds are only derived for output.
     """
 
@@ -47,6 +48,7 @@ class Master:
         # not pay 200 empty calls per communication step.
         self._sensing = [c for c in comps if type(c).sense is not Component.sense]
         self._actuating = [c for c in comps if type(c).actuate is not Component.actuate]
+        self._stepping = [c for c in comps if type(c).step is not Component.step]
         self._emitters = [c for c in comps if _may_emit(c)]
         self._communicated = False
 
@@ -75,8 +77,12 @@ class Master:
         self._communicated = True
 
     def advance(self) -> None:
-        """Run the physics substeps of one communication step."""
-        self.world.step(self.plant.scenario.run.substeps)
+        """Step the logic components over one communication step, then run its physics substeps."""
+        run = self.plant.scenario.run
+        t, h = self.world.tick / run.physics_rate, run.substeps / run.physics_rate
+        for comp in self._stepping:
+            comp.step(t, h)
+        self.world.step(run.substeps)
 
     def run(self, until_tick: int | None = None, progress=None) -> RunResult:
         """Communicate at every point from now to `until_tick` (default: the scenario's end)."""

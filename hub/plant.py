@@ -18,10 +18,11 @@ class Plant:
         self.world = PhysicsWorld(scenario.run.physics_rate)
         try:
             self.objects: dict[str, DynamicObject] = {}
+            self.components: list[Component] = []
             for spec in scenario.objects:
                 components = spec.module.build(spec.name, spec.params, self.world)
                 self.objects[spec.name] = DynamicObject(spec.name, spec.module_name, components)
-            self.components: list[Component] = [c for o in self.objects.values() for c in o.components.values()]
+                self.components.extend(components.values())
             slots, self.index, local_indices = [], {}, []
             for comp in self.components:
                 local = {}
@@ -47,11 +48,15 @@ class Plant:
             ]
             self.world.start()
         except BaseException:
-            self.world.close()
+            self.close()
             raise
 
     def close(self) -> None:
-        self.world.close()
+        try:
+            for comp in getattr(self, "components", []):
+                comp.close()
+        finally:
+            self.world.close()
 
     def __enter__(self):
         return self

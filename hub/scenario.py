@@ -106,6 +106,15 @@ def _apply_overrides(data, overrides: dict, file: str) -> list[Problem]:
     return problems
 
 
+def _resolve_paths(params: dict, schema: dict, base: Path) -> dict:
+    """Parameters marked `"x-path": true` in a module's schema are relative to the scenario file."""
+    out = dict(params)
+    for key, prop in schema.get("properties", {}).items():
+        if prop.get("x-path") and isinstance(out.get(key), str):
+            out[key] = str((base / out[key]).resolve())
+    return out
+
+
 def _scenario_schema() -> dict:
     return json.loads((SCHEMAS / "scenario.schema.json").read_text())
 
@@ -199,9 +208,12 @@ class _Checker:
             self.validate(params, module.PARAMETERS, at)
             if len(self.problems) > before:
                 continue
-            params = module.with_defaults(params)
-            for where, message in module.check(params):
+            params = _resolve_paths(module.with_defaults(params), module.PARAMETERS, self.path.parent)
+            found = module.check(params)
+            for where, message in found:
                 self.problem(at + where, message)
+            if found:
+                continue
             if "id" in params:
                 if params["id"] in ids:
                     self.problem(at + ("id",), f"duplicate id {params['id']!r} (also used by object {ids[params['id']]!r})")

@@ -5,5 +5,6 @@ CATALOGUE = {
     "connector": "modules.connector:Connector",
     "constant": "modules.constant:Constant",
     "conveyor": "modules.conveyor:Conveyor",
+    "fmu": "modules.fmu:Fmu",
     "light_barrier": "modules.light_barrier:LightBarrier",
 }

@@ -6,6 +6,7 @@
 | value.out    | param `type`  | source | the fixed value; active when `set` fired (or always)  |
 
 With `always: true` the value is emitted in every step, as a setpoint that never changes.
+`value.out` holds the value from the start, so a flow with `when: target` pulls it any time.
 The value follows `set` within the same step, so a sensor event can stop a belt at once.
 """
 from __future__ import annotations
@@ -23,6 +24,11 @@ class Value(Component):
         self.SLOTS = slots
         self.constant = value
         self.always = always
+
+    def bind(self, signals, index, needed):
+        super().bind(signals, index, needed)
+        # Hold the value from the start, so a flow that pulls (when: target) reads it at once.
+        signals.values[index["out"]] = self.constant
 
     def react(self):
         if self.always or self.updated("set"):

@@ -45,11 +45,13 @@ def test_run_writes_recording_and_event_log(tmp_path):
 def test_describe_lists_modules_and_a_modules_slots():
     listing = planthub("describe")
     assert listing.returncode == 0
-    assert [line.split()[0] for line in listing.stdout.splitlines()] == [
-        "bottle", "connector", "constant", "conveyor", "light_barrier"]
+    from modules import CATALOGUE
+
+    assert [line.split()[0] for line in listing.stdout.splitlines()] == sorted(CATALOGUE)
     conveyor = planthub("describe", "conveyor")
     assert "  drive.speed            real    target  target belt speed, m/s" in conveyor.stdout
     assert "  length         required" in conveyor.stdout
+    assert "| drive.speed           | real | target |" in conveyor.stdout   # the module's slot table
 
 
 def test_describe_unknown_module_suggests():

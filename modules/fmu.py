@@ -1,0 +1,135 @@
+"""FMU: logic in an FMI 2.0 or 3.0 co-simulation FMU, stepped at every communication point.
+
+| slot           | type        | dir    | meaning                                                  |
+|----------------|-------------|--------|----------------------------------------------------------|
+| logic.<input>  | the input's | target | each FMU input variable (Real, Integer, Boolean, String) |
+| logic.<output> | the output's| source | each FMU output variable, active every step              |
+
+Variables named in `events` become void slots: a void target sets the Boolean input true in
+the steps a flow fed it (false otherwise); a Boolean output true makes the void source fire.
+`map` renames variables to slot names. The FMU steps from t to t + h with the inputs it got at
+t; its outputs appear at the next communication point.
+"""
+from __future__ import annotations
+
+import re
+
+from hub.component import Component
+from hub.fmu import FmuError, FmuSlave, inspect_fmu
+from hub.module import Module
+from hub.registry import did_you_mean
+from hub.slots import Slot, SlotType
+
+_SLOT_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
+class FmuLogic(Component):
+    def __init__(self, obj, name, slots, slave: FmuSlave, inputs, outputs):
+        super().__init__(obj, name)
+        self.SLOTS = slots
+        self.slave = slave
+        self.inputs = inputs      # [(slot name, is event)] in the FMU's input order
+        self.outputs = outputs    # [(slot name, is event)] in the FMU's output order
+        self.latest = slave.outputs()
+
+    def sense(self, tick):
+        for (slot, event), value in zip(self.outputs, self.latest):
+            if not event:
+                self.emit(slot, value)
+            elif value:
+                self.emit(slot)
+
+    def step(self, t, h):
+        signals, index = self.signals, self.index
+        values = [signals.updated[index[slot]] if event else signals.values[index[slot]]
+                  for slot, event in self.inputs]
+        self.slave.set_inputs(values)
+        self.slave.step(t, h)
+        self.latest = self.slave.outputs()
+
+    def close(self):
+        self.slave.close()
+
+
+class Fmu(Module):
+    """Logic in an FMU (FMI 2.0 or 3.0 co-simulation): inputs are target slots, outputs sources."""
+
+    PARAMETERS = {
+        "type": "object",
+        "properties": {
+            "file": {"type": "string", "x-path": True, "description": "the .fmu, relative to the scenario file"},
+            "parameters": {"type": "object", "default": {},
+                           "description": "values of the FMU's parameters, by variable name"},
+            "events": {"type": "array", "items": {"type": "string"}, "uniqueItems": True, "default": [],
+                       "description": "Boolean inputs/outputs to expose as void (event) slots"},
+            "map": {"type": "object", "additionalProperties": {"type": "string", "pattern": _SLOT_NAME.pattern},
+                    "default": {}, "description": "variable name → slot name"},
+        },
+        "required": ["file"],
+        "additionalProperties": False,
+    }
+    COMPONENTS = {"logic": FmuLogic}
+
+    @classmethod
+    def check(cls, params):
+        try:
+            fmu = inspect_fmu(params["file"])
+        except FmuError as exc:
+            return [(("file",), str(exc))]
+        problems = []
+        variables = fmu.variables
+        ports = {v.name for v in fmu.of("input") + fmu.of("output")}
+        tunable = {v.name: v for v in fmu.of("parameter")}
+        for name, value in params["parameters"].items():
+            if name not in tunable:
+                problems.append((("parameters", name), f"{fmu.path.name} has no parameter {name!r}"
+                                 f"{did_you_mean(name, tunable)}"))
+                continue
+            try:
+                tunable[name].type.coerce(value)
+            except ValueError as exc:
+                problems.append((("parameters", name), f"{name} is {tunable[name].fmi_type}: {exc}"))
+        for i, name in enumerate(params["events"]):
+            if name not in ports:
+                problems.append((("events", i), f"{fmu.path.name} has no input or output {name!r}"
+                                 f"{did_you_mean(name, ports)}"))
+            elif variables[name].type is not SlotType.BOOL:
+                problems.append((("events", i), f"{name} is {variables[name].fmi_type}; only a Boolean can be an event"))
+        for name in params["map"]:
+            if name not in ports:
+                problems.append((("map", name), f"{fmu.path.name} has no input or output {name!r}"
+                                 f"{did_you_mean(name, ports)}"))
+        for v in fmu.of("input") + fmu.of("output"):
+            slot = params["map"].get(v.name, v.name)
+            if not _SLOT_NAME.match(slot):
+                problems.append((("map",), f"variable {v.name!r} needs a slot name: add `{v.name}: some_name` to map"))
+        return problems
+
+    @classmethod
+    def slots(cls, params):
+        if "file" not in params:
+            return {"logic": ()}
+        return {"logic": tuple(s for s, _ in cls._ports(params, inspect_fmu(params["file"])))}
+
+    @classmethod
+    def _ports(cls, params, fmu):
+        """(slot, variable name) for every input then every output, in the FMU's order."""
+        out = []
+        events, names = set(params.get("events", ())), params.get("map", {})
+        for causality, make in (("input", Slot.target), ("output", Slot.source)):
+            for v in fmu.of(causality):
+                kind = "void" if v.name in events else v.type.value
+                out.append((make(names.get(v.name, v.name), kind, v.description), v.name))
+        return out
+
+    @classmethod
+    def build(cls, name, params, world):
+        fmu = inspect_fmu(params["file"])
+        ports = cls._ports(params, fmu)
+        inputs = [(s, v) for s, v in ports if fmu.variables[v].causality == "input"]
+        outputs = [(s, v) for s, v in ports if fmu.variables[v].causality == "output"]
+        parameters = {k: fmu.variables[k].type.coerce(v) for k, v in params["parameters"].items()}
+        slave = FmuSlave(fmu, name, [v for _, v in inputs], [v for _, v in outputs], parameters)
+        as_pairs = lambda pairs: [(s.name, s.type is SlotType.VOID) for s, _ in pairs]
+        return {"logic": FmuLogic(name, "logic", tuple(s for s, _ in ports), slave,
+                                  as_pairs(inputs), as_pairs(outputs))}

@@ -1,0 +1,174 @@
+"""FMU logic in the step loop: the belt-drive FMU drives a belt; bad FMUs are named clearly."""
+import csv
+import re
+import zipfile
+
+import pytest
+
+from hub.errors import ScenarioError, SimulationError
+from hub.scenario import load_scenario
+
+from .fmus.fmu_support import build
+from .helpers import ROOT, run_scenario
+
+SCENARIO = ROOT / "scenarios" / "belt_ramp_fmu.yaml"
+BUILT = ROOT / "build" / "fmus"
+
+
+@pytest.fixture(scope="module")
+def fmus():
+    """The project's FMUs, brought up to date (free after `make fmus`)."""
+    return build(BUILT)
+
+
+@pytest.fixture(scope="module")
+def faulty(tmp_path_factory):
+    """The test-only `faulty` model (tests/fmu_models/faulty) built for FMI 2 and 3."""
+    return build(tmp_path_factory.mktemp("faulty"), models_dir=ROOT / "tests" / "fmu_models")
+
+
+def rows(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_fmu_ramps_the_belt_and_its_output_lags_one_communication_step(fmus, tmp_path):
+    """
+        go ─► drive.logic.run ; setpoint ─► drive.logic.speed_setpoint ; drive.logic.speed ─► belt.drive.speed
+        barrier.on_enter ─► stop ─► drive.logic.run (false)
+    """
+    run_scenario(SCENARIO, tmp_path)
+    data = rows(tmp_path / "recording.csv")
+    speed = [float(r["drive.logic.speed"]) for r in data]
+    h = 0.02
+    # Ramp 0.5 m/s² from t = 0: the output at point k is what the step ending there computed.
+    assert speed[0] == 0.0 and speed[1] == pytest.approx(0.5 * h)
+    assert speed[50] == 0.5   # 1.0 s: the setpoint is reached exactly, not one step late
+    # The belt takes the FMU's speed at the point it is sensed; its own source shows it one point later.
+    for k in range(1, 60):
+        assert float(data[k + 1]["belt.drive.velocity"]) == speed[k]
+    fired = next(k for k, r in enumerate(data) if r["barrier.trigger.on_enter"] == "1")
+    assert speed[fired] == 0.5 and speed[fired + 1] == pytest.approx(0.5 - 0.5 * h)
+    stopped = next(k for k in range(fired, len(speed)) if speed[k] == 0.0)
+    assert (stopped - fired) * h == pytest.approx(1.0)
+    assert data[stopped]["drive.logic.running"] == "0"
+    assert abs(float(data[-1]["bottle.body.position.x"]) - float(data[-20]["bottle.body.position.x"])) < 1e-5
+
+
+def test_fmi2_and_fmi3_builds_give_bit_identical_recordings(fmus, tmp_path):
+    run_scenario(SCENARIO, tmp_path / "fmi2")
+    run_scenario(SCENARIO, tmp_path / "fmi3", {"objects.drive.file": str(fmus / "belt_drive-fmi3.fmu")})
+    for name in ("recording.csv", "events.csv"):
+        assert (tmp_path / "fmi2" / name).read_bytes() == (tmp_path / "fmi3" / name).read_bytes()
+
+
+def scene(write_scenario, drive: str, flows: str = ""):
+    return write_scenario(f"""
+        planthub: 1
+        objects:
+          belt: {{module: conveyor, position: [0, 0, 0], length: 2}}
+          drive: {{module: fmu, {drive}}}
+        flows: [{flows}]
+        """)
+
+
+def problems(path):
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    return [str(p) for p in info.value.problems]
+
+
+def test_missing_file_not_a_zip_and_no_description(fmus, write_scenario, tmp_path):
+    (tmp_path / "text.fmu").write_text("not a zip")
+    with zipfile.ZipFile(tmp_path / "empty.fmu", "w") as z:
+        z.writestr("readme.txt", "nothing")
+    for name, cause in [("nope.fmu", "no such FMU file"),
+                        ("text.fmu", "not an FMU (an FMU is a zip archive)"),
+                        ("empty.fmu", "no modelDescription.xml in the archive")]:
+        path = scene(write_scenario, f"file: {name}")
+        assert problems(path) == [f"{path}:4: objects.drive.file: {tmp_path / name}: {cause}"]
+
+
+def rewrite(source, target, edit_xml=None, drop=None):
+    """Copy an FMU, editing its modelDescription.xml and dropping archive members."""
+    with zipfile.ZipFile(source) as src, zipfile.ZipFile(target, "w") as dst:
+        for item in src.infolist():
+            if drop and drop(item.filename):
+                continue
+            data = src.read(item.filename)
+            if item.filename == "modelDescription.xml" and edit_xml:
+                data = edit_xml(data.decode()).encode()
+            dst.writestr(item, data)
+
+
+def test_fmi1_model_exchange_only_and_missing_binary(fmus, write_scenario, tmp_path):
+    fmi2 = fmus / "belt_drive-fmi2.fmu"
+    rewrite(fmi2, tmp_path / "me.fmu", edit_xml=lambda x: re.sub(
+        r"<CoSimulation[^>]*?(/?)>", r'<ModelExchange modelIdentifier="belt_drive"\1>', x)
+        .replace("</CoSimulation>", "</ModelExchange>"))
+    rewrite(fmi2, tmp_path / "nobin.fmu", drop=lambda name: name.startswith("binaries/"))
+    rewrite(fmi2, tmp_path / "v1.fmu", edit_xml=lambda x: x.replace('fmiVersion="2.0"', 'fmiVersion="1.0"'))
+    found = {}
+    for name in ("me.fmu", "nobin.fmu", "v1.fmu"):
+        found[name] = problems(scene(write_scenario, f"file: {name}", ""))[0].split(": objects.drive.file: ")[1]
+    assert found["me.fmu"] == f"{tmp_path / 'me.fmu'}: model exchange only; planthub needs a co-simulation FMU"
+    assert found["nobin.fmu"] == (f"{tmp_path / 'nobin.fmu'}: no binary for this platform "
+                                  f"(binaries/linux64/belt_drive.so); the FMU has: none")
+    assert found["v1.fmu"] == (f"{tmp_path / 'v1.fmu'}: FMI 1.0 is not supported "
+                               f"(planthub loads FMI 2.0 and 3.0 co-simulation FMUs)")
+
+
+def test_unknown_parameter_event_and_type_mismatch(fmus, write_scenario):
+    drive = f"file: {fmus / 'belt_drive-fmi2.fmu'}, parameters: {{rampe: 1, }}, events: [speed]"
+    path = scene(write_scenario, drive)
+    assert problems(path) == [
+        f"{path}:4: objects.drive.parameters.rampe: belt_drive-fmi2.fmu has no parameter 'rampe' "
+        f"(did you mean 'ramp'?)",
+        f"{path}:4: objects.drive.events[0]: speed is Real; only a Boolean can be an event",
+    ]
+    path = scene(write_scenario, f"file: {fmus / 'belt_drive-fmi2.fmu'}", "{from: drive.logic.speed, to: belt.drive.run}")
+    assert problems(path) == [f"{path}:5: flows[0]: type mismatch: drive.logic.speed is real but belt.drive.run is bool"]
+
+
+def test_map_names_a_variable_the_fmu_lacks(fmus, write_scenario):
+    path = scene(write_scenario, f"file: {fmus / 'belt_drive-fmi2.fmu'}, map: {{sped: belt_speed}}")
+    assert problems(path) == [f"{path}:4: objects.drive.map.sped: belt_drive-fmi2.fmu has no input or output "
+                              f"'sped' (did you mean 'speed'?)"]
+
+
+def test_map_renames_slots(fmus, write_scenario):
+    path = scene(write_scenario, f"file: {fmus / 'belt_drive-fmi2.fmu'}, map: {{speed: belt_speed}}",
+                 "{from: drive.logic.belt_speed, to: belt.drive.speed}")
+    assert [str(f.source) for f in load_scenario(path).flows] == ["drive.logic.belt_speed"]
+
+
+def test_parameter_of_the_wrong_type(fmus, write_scenario):
+    path = scene(write_scenario, f"file: {fmus / 'belt_drive-fmi2.fmu'}, parameters: {{ramp: fast}}")
+    assert problems(path) == [f"{path}:4: objects.drive.parameters.ramp: ramp is Real: expected a finite number, "
+                              f"got 'fast'"]
+
+
+@pytest.mark.parametrize("version", [2, 3])
+def test_failing_do_step_names_instance_function_time_and_log(faulty, write_scenario, tmp_path, version):
+    path = write_scenario(f"""
+        planthub: 1
+        run: {{duration: 1.0, physics_rate: 100, communication_step: 0.1}}
+        objects:
+          counter: {{module: fmu, file: {faulty / f'faulty-fmi{version}.fmu'}}}
+          fail: {{module: constant, type: bool, value: true}}
+          other: {{module: fmu, file: {faulty / f'faulty-fmi{version}.fmu'}}}
+        record: [counter.logic.steps]
+        """)
+    # `counter` gets fail = true at once; `other`, a second instance of the same FMU, keeps counting
+    # and must not swallow the failing instance's log lines.
+    text = path.read_text() + "flows:\n  - {from: fail.value.out, to: counter.logic.fail, when: target}\n"
+    path.write_text(text)
+    out = tmp_path / "out"
+    with pytest.raises(SimulationError) as info:
+        run_scenario(path, out)
+    message = str(info.value)
+    assert message.startswith(f"FMU instance 'counter' (faulty-fmi{version}.fmu) at t = 0 s: "
+                              f"fmi{version}DoStep returned error\n  FMU log:\n")
+    assert "faulty: asked to fail at t = 0 s after 0 steps" in message
+    # What was recorded before the failure is on disk.
+    assert rows(out / "recording.csv")[0]["counter.logic.steps"] == "0"
