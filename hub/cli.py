@@ -32,9 +32,15 @@ def main(argv=None) -> int:
     describe = sub.add_parser("describe", help="list a module's parameters and slots (no name: list modules)")
     describe.add_argument("module", nargs="?")
 
+    check_fmu = sub.add_parser("check-fmu", help="check an FMU before a run: version, slots, validation")
+    check_fmu.add_argument("fmu", type=Path)
+    check_fmu.add_argument("--like", type=Path, metavar="REFERENCE.fmu",
+                           help="also check it can replace this FMU (same inputs and outputs)")
+
     args = parser.parse_args(argv)
     try:
-        return {"run": _run, "validate": _validate, "describe": _describe}[args.command](args)
+        commands = {"run": _run, "validate": _validate, "describe": _describe, "check-fmu": _check_fmu}
+        return commands[args.command](args)
     except ScenarioError as exc:
         print(f"planthub: {exc}", file=sys.stderr)
         return 2
@@ -141,3 +147,27 @@ def _describe(args) -> int:
     for comp, slot in slots:
         print(f"  {comp + '.' + slot.name:<22} {slot.type.value:<7} {slot.direction.value:<7} {slot.doc}")
     return 0
+
+
+def _check_fmu(args) -> int:
+    from .fmu import FmuError, compare, inspect_fmu, validate
+
+    try:
+        fmu = inspect_fmu(args.fmu)
+        reference = inspect_fmu(args.like) if args.like else None
+    except FmuError as exc:
+        print(f"planthub: {exc}", file=sys.stderr)
+        return 1
+    print(f"{args.fmu}: FMI {fmu.fmi_version} co-simulation, model {fmu.model_name!r}")
+    for causality, label in (("input", "target slots"), ("output", "source slots"), ("parameter", "parameters")):
+        names = ", ".join(f"{v.name} ({v.type.value})" for v in fmu.of(causality)) or "none"
+        print(f"  {label:<13} {names}")
+    problems = [f"validation: {p}" for p in validate(args.fmu)]
+    if reference is not None:
+        problems += compare(fmu, reference)
+    for problem in problems:
+        print(f"  ✗ {problem}")
+    if not problems:
+        fits = f"; fits in place of {args.like}" if reference is not None else ""
+        print(f"  ✓ passes fmpy's validation{fits}")
+    return 1 if problems else 0

@@ -103,6 +103,30 @@ def inspect_fmu(path: Path) -> FmuInterface:
     return FmuInterface(path, version, md.modelName, identifier, md.guid, variables)
 
 
+def validate(path: Path) -> list[str]:
+    """fmpy's own checks of an FMU (model description, structure, names): a list of problems."""
+    from fmpy.validation import validate_fmu
+
+    return [str(p).strip() for p in validate_fmu(str(path))]
+
+
+def compare(fmu: FmuInterface, reference: FmuInterface) -> list[str]:
+    """What `fmu` lacks to stand in for `reference`: inputs and outputs by name and slot type."""
+    problems = []
+    for causality in ("input", "output"):
+        for want in reference.of(causality):
+            have = fmu.variables.get(want.name)
+            if have is None or have.causality != causality:
+                problems.append(f"missing {causality} {want.name!r} ({want.type.value})")
+            elif have.type is not want.type:
+                problems.append(f"{causality} {want.name!r} is {have.type.value} here but {want.type.value} "
+                                f"in {reference.path.name}")
+    for name in sorted(n for n, v in reference.variables.items() if v.causality == "parameter"):
+        if name not in fmu.variables:
+            problems.append(f"no parameter {name!r} (a scenario setting it would be rejected)")
+    return problems
+
+
 class FmuSlave:
     """One running co-simulation instance, stepped at communication points.
 
@@ -137,6 +161,13 @@ class FmuSlave:
                 self._call("enterInitializationMode", self._fmu.enterInitializationMode, startTime=start_time)
             self._call("set parameters", params.set, list(parameters.values()))
             self._call("exitInitializationMode", self._fmu.exitInitializationMode)
+            if self._v2:
+                self._raw_do_step, self._do_step = _raw(self._fmu, "fmi2DoStep"), self._do_step_2
+            else:
+                self._raw_do_step, self._do_step = _raw(self._fmu, "fmi3DoStep"), self._do_step_3
+                # eventHandlingNeeded, terminateSimulation, earlyReturn, lastSuccessfulTime
+                self._step_results = tuple(ctypes.byref(c()) for c in
+                                           (ctypes.c_bool, ctypes.c_bool, ctypes.c_bool, ctypes.c_double))
         except BaseException:
             self.close()
             raise
@@ -157,9 +188,9 @@ class FmuSlave:
             callbacks.componentEnvironment = self._env
             addLoggerProxy(ctypes.byref(callbacks))
             self._callbacks = callbacks   # kept alive as long as the instance
-            self._call("instantiate", self._fmu.instantiate, callbacks=callbacks, loggingOn=True)
+            self._call("instantiate", self._fmu.instantiate, callbacks=callbacks, loggingOn=False)
         else:
-            self._call("instantiate", self._fmu.instantiate, loggingOn=True,
+            self._call("instantiate", self._fmu.instantiate, loggingOn=False,
                        logMessage=lambda env, status, category, message: self._logged(status, category, message))
 
     def _logged(self, status, category, message) -> None:
@@ -190,8 +221,14 @@ class FmuSlave:
 
     def step(self, t: float, h: float) -> None:
         self.time = t
-        self._call("doStep", self._fmu.doStep, currentCommunicationPoint=t, communicationStepSize=h)
+        self._call("doStep", self._do_step, t, h)
         self.time = t + h
+
+    def _do_step_2(self, t: float, h: float) -> None:
+        _check("fmi2DoStep", self._raw_do_step(self._fmu.component, t, h, 1))
+
+    def _do_step_3(self, t: float, h: float) -> None:
+        _check("fmi3DoStep", self._raw_do_step(self._fmu.component, t, h, True, *self._step_results))
 
     def close(self) -> None:
         fmu, self._fmu = self._fmu, None
@@ -236,24 +273,36 @@ class _Batches:
             prefix = "fmi2" if v2 else "fmi3"
             # FMI 3 getters and setters also take the number of values (arrays may differ).
             extra = () if v2 else (len(members),)
+            get, set_ = f"{prefix}Get{family}", f"{prefix}Set{family}"
             self.groups.append((members, variables[members[0]].type, vrs, values, extra,
-                                getattr(fmu, f"{prefix}Get{family}"), getattr(fmu, f"{prefix}Set{family}")))
+                                get, _raw(fmu, get), set_, _raw(fmu, set_)))
 
     def set(self, values: list) -> None:
         component = self.fmu.component
-        for members, kind, vrs, buf, extra, _, setter in self.groups:
+        for members, kind, vrs, buf, extra, _, _, name, setter in self.groups:
             for k, i in enumerate(members):
                 buf[k] = _to_c(kind, values[i])
-            setter(component, vrs, len(vrs), buf, *extra)
+            _check(name, setter(component, vrs, len(vrs), buf, *extra))
 
     def get(self) -> list:
         out = [None] * self.count
         component = self.fmu.component
-        for members, kind, vrs, buf, extra, getter, _ in self.groups:
-            getter(component, vrs, len(vrs), buf, *extra)
+        for members, kind, vrs, buf, extra, name, getter, _, _ in self.groups:
+            _check(name, getter(component, vrs, len(vrs), buf, *extra))
             for k, i in enumerate(members):
                 out[i] = _from_c(kind, buf[k])
         return out
+
+
+def _raw(fmu, name: str):
+    """The FMI function itself (fmpy has set its argument types), without fmpy's Python wrapper:
+    at every communication point that wrapper costs more than the call."""
+    return getattr(fmu.dll, name)
+
+
+def _check(function: str, status: int) -> None:
+    if status > 1:   # ok and warning pass; discard, error, fatal, pending do not
+        raise FMICallException(function=function, status=status)
 
 
 # FMI type → (function family, C type), per FMI version.

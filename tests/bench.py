@@ -92,10 +92,64 @@ def bottle_scaling() -> None:
               f"| {scenario.run.end_tick / scenario.run.physics_rate / hub:.1f}× |")
 
 
+class PythonBeltDrive:
+    """The belt_drive FMU's logic written in plain Python: the floor for FMU stepping."""
+
+    def __init__(self, ramp: float):
+        self.ramp, self.speed, self.run, self.setpoint = ramp, 0.0, False, 0.0
+
+    def set_inputs(self, values):
+        self.run, self.setpoint = values
+
+    def step(self, t, h):
+        target = self.setpoint if self.run else 0.0
+        gap, most = target - self.speed, self.ramp * h
+        if gap != 0.0:
+            self.speed = target if abs(gap) <= most * (1 + 1e-9) else self.speed + (most if gap > 0 else -most)
+
+    def outputs(self):
+        return [self.speed, self.speed != 0.0]
+
+
+def fmu_stepping() -> None:
+    from hub.fmu import FmuSlave, inspect_fmu
+
+    print("\n## Logic stepping: N belt_drive instances per communication step (set inputs, doStep, get outputs)\n")
+    print("| instances | FMI 2.0 FMU µs/step | FMI 3.0 FMU µs/step | plain Python µs/step | FMI 2.0 / Python |")
+    print("|---:|---:|---:|---:|---:|")
+    steps = 2000
+    for n in (10, 50):
+        costs = {}
+        for kind in ("fmi2", "fmi3", "python"):
+            if kind == "python":
+                make = lambda i: PythonBeltDrive(0.5)
+            else:
+                interface = inspect_fmu(ROOT / "build" / "fmus" / f"belt_drive-{kind}.fmu")
+                make = lambda i, f=interface: FmuSlave(f, f"d{i}", ["run", "speed_setpoint"],
+                                                       ["speed", "running"], {"ramp": 0.5})
+            instances = [make(i) for i in range(n)]
+            clock = iter(range(10**9))
+
+            def loop():
+                for _ in range(steps):
+                    k = next(clock)
+                    t = k * 0.01
+                    for inst in instances:
+                        inst.set_inputs([k % 400 < 200, 0.5])
+                        inst.step(t, 0.01)
+                        inst.outputs()
+            costs[kind] = timed(loop) / steps
+            for inst in instances:
+                getattr(inst, "close", lambda: None)()
+        print(f"| {n} | {1e6 * costs['fmi2']:.0f} | {1e6 * costs['fmi3']:.0f} | {1e6 * costs['python']:.0f} "
+              f"| {costs['fmi2'] / costs['python']:.1f} |")
+
+
 def main() -> int:
     print(f"planthub benchmark — median of {REPEATS} runs each, Python {sys.version.split()[0]}\n")
     rate_sweep()
     bottle_scaling()
+    fmu_stepping()
     return 0
 
 

@@ -172,3 +172,33 @@ def test_failing_do_step_names_instance_function_time_and_log(faulty, write_scen
     assert "faulty: asked to fail at t = 0 s after 0 steps" in message
     # What was recorded before the failure is on disk.
     assert rows(out / "recording.csv")[0]["counter.logic.steps"] == "0"
+
+
+def check_fmu(*args):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "hub", "check-fmu", *map(str, args)],
+                          capture_output=True, text=True, cwd=ROOT)
+
+
+def test_check_fmu_accepts_a_fitting_replacement(fmus):
+    proc = check_fmu(fmus / "belt_drive-fmi3.fmu", "--like", fmus / "belt_drive-fmi2.fmu")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "  target slots  run (bool), speed_setpoint (real)\n" in proc.stdout
+    assert proc.stdout.endswith(f"  ✓ passes fmpy's validation; fits in place of {fmus / 'belt_drive-fmi2.fmu'}\n")
+
+
+def test_check_fmu_lists_what_a_replacement_lacks(fmus):
+    proc = check_fmu(fmus / "timer-fmi2.fmu", "--like", fmus / "belt_drive-fmi2.fmu")
+    assert proc.returncode == 1
+    assert "  ✗ missing input 'run' (bool)\n" in proc.stdout
+    assert "  ✗ missing output 'speed' (real)\n" in proc.stdout
+    assert "  ✗ no parameter 'ramp' (a scenario setting it would be rejected)\n" in proc.stdout
+
+
+def test_check_fmu_names_an_unusable_file(tmp_path):
+    (tmp_path / "x.fmu").write_text("plain text")
+    proc = check_fmu(tmp_path / "x.fmu")
+    assert proc.returncode == 1
+    assert proc.stderr == f"planthub: {tmp_path / 'x.fmu'}: not an FMU (an FMU is a zip archive)\n"
