@@ -47,6 +47,9 @@ def main(argv=None) -> int:
     except PlanthubError as exc:
         print(f"planthub: {exc}", file=sys.stderr)
         return 1
+    except BrokenPipeError:   # output piped into `head` and the like
+        sys.stderr.close()
+        return 0
 
 
 def _add_set(parser) -> None:

@@ -58,6 +58,7 @@ class FmuInterface:
     identifier: str
     guid: str
     variables: dict[str, FmuVariable]
+    variable_steps: bool       # canHandleVariableCommunicationStepSize
 
     def of(self, causality: str) -> list[FmuVariable]:
         return [v for v in self.variables.values() if v.causality == causality]
@@ -100,7 +101,8 @@ def inspect_fmu(path: Path) -> FmuInterface:
             continue   # arrays, clocks and other types are not mapped to slots
         variables[v.name] = FmuVariable(v.name, kind, v.causality, v.valueReference, v.type,
                                         v.start, v.description or "")
-    return FmuInterface(path, version, md.modelName, identifier, md.guid, variables)
+    variable_steps = bool(md.coSimulation.canHandleVariableCommunicationStepSize)
+    return FmuInterface(path, version, md.modelName, identifier, md.guid, variables, variable_steps)
 
 
 def validate(path: Path) -> list[str]:

@@ -33,9 +33,10 @@ class Master:
     2. flows and connectors are evaluated in the order fixed at load time;
     3. every component actuates: targets are applied to the world;
     4. the row for this point is recorded and the events of the step logged;
-    then, to reach the next point, 5. logic components (FMUs) step from t to t + h with the
-    inputs flows gave them at t (Jacobi: their outputs appear at the next point), and 6. the
-    world runs the communication step's physics substeps.
+    then, to reach the next point, 5. the world runs the communication step's physics
+    substeps (with `event_driven`, it stops at the tick after a trigger event), and 6. logic
+    components (FMUs) step over the same interval from t with the inputs flows gave them at t
+    (Jacobi: their outputs appear at the next point).
     Time is the physics tick count; seconds are only derived for output.
     """
 
@@ -51,6 +52,7 @@ class Master:
         self._stepping = [c for c in comps if type(c).step is not Component.step]
         self._emitters = [c for c in comps if _may_emit(c)]
         self._communicated = False
+        self._answering = False   # the last step ended early on an event
 
     @property
     def tick(self) -> int:
@@ -76,13 +78,27 @@ class Master:
         self.recorder.sample(tick, signals)
         self._communicated = True
 
-    def advance(self) -> None:
-        """Step the logic components over one communication step, then run its physics substeps."""
+    def advance(self, until_tick: int | None = None) -> None:
+        """Run one communication step's physics, then step the logic over the same interval.
+
+        Logic steps from t with the inputs it got at t, so running it after the physics changes
+        nothing in its results, and lets an event-driven step end early: the physics stops at
+        the tick after a trigger event, the logic steps over exactly that interval, and the
+        next step lasts one tick, so the logic's answer reaches the plant a tick later instead
+        of a whole communication step later.
+        """
         run = self.plant.scenario.run
-        t, h = self.world.tick / run.physics_rate, run.substeps / run.physics_rate
+        start = self.world.tick
+        # After an early stop the logic gets one tick to answer the event, then the steps end
+        # on the regular grid again.
+        end = start + 1 if self._answering else (start // run.substeps + 1) * run.substeps
+        if until_tick is not None:
+            end = min(end, until_tick)
+        ticks = self.world.step(end - start, stop_on_event=run.event_driven)
+        self._answering = start + ticks < end
+        t, h = start / run.physics_rate, ticks / run.physics_rate
         for comp in self._stepping:
             comp.step(t, h)
-        self.world.step(run.substeps)
 
     def run(self, until_tick: int | None = None, progress=None) -> RunResult:
         """Communicate at every point from now to `until_tick` (default: the scenario's end)."""
@@ -91,7 +107,7 @@ class Master:
         if not self._communicated:
             self.communicate()
         while self.world.tick < end:
-            self.advance()
+            self.advance(end)
             self.communicate()
             if progress is not None:
                 progress(self.world.tick, end)

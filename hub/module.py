@@ -44,6 +44,11 @@ class Module:
         return []
 
     @classmethod
+    def check_run(cls, params: dict, run) -> list[tuple[tuple, str]]:
+        """Problems of these parameters under the scenario's run settings (`RunSettings`)."""
+        return []
+
+    @classmethod
     def with_defaults(cls, params: dict) -> dict:
         """The parameters with every default from `PARAMETERS` filled in."""
         out = {k: v["default"] for k, v in cls.PARAMETERS.get("properties", {}).items() if "default" in v}

@@ -39,6 +39,7 @@ class RunSettings:
     substeps: int            # physics ticks per communication step
     end_tick: int            # a whole number of communication steps
     seed: int
+    event_driven: bool = False   # a trigger event ends the communication step at its tick
 
     @property
     def dt(self) -> float:
@@ -160,7 +161,7 @@ class _Checker:
     # --- meaning --------------------------------------------------------------------------
     def build(self) -> Scenario:
         data = self.data
-        run = self.run_settings(_dict(data.get("run")))
+        run = self.run = self.run_settings(_dict(data.get("run")))
         objects, slot_tables = self.objects(_dict(data.get("objects")))
         flows = self.flows(_list(data.get("flows")), slot_tables)
         record = self.record(_list(data.get("record")), slot_tables)
@@ -176,6 +177,7 @@ class _Checker:
             ok = isinstance(value, kind) and not isinstance(value, bool) and value > 0
             return value if ok else default
         rate = number("physics_rate", 150, int)
+        event_driven = run.get("event_driven") is True
         run = {"duration": number("duration", 10), "seed": number("seed", 0, int),
                **({"communication_step": run["communication_step"]} if number("communication_step", None) else {})}
         substeps = 1
@@ -190,7 +192,7 @@ class _Checker:
                 substeps = lo
         ticks = round(run.get("duration", 10) * rate)
         end = max(1, math.ceil(ticks / substeps)) * substeps
-        return RunSettings(rate, substeps, end, run.get("seed", 0))
+        return RunSettings(rate, substeps, end, run.get("seed", 0), event_driven)
 
     def objects(self, specs: dict):
         objects, tables, ids = [], {}, {}
@@ -209,7 +211,7 @@ class _Checker:
             if len(self.problems) > before:
                 continue
             params = _resolve_paths(module.with_defaults(params), module.PARAMETERS, self.path.parent)
-            found = module.check(params)
+            found = module.check(params) or module.check_run(params, self.run)
             for where, message in found:
                 self.problem(at + where, message)
             if found:

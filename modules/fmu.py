@@ -106,6 +106,14 @@ class Fmu(Module):
         return problems
 
     @classmethod
+    def check_run(cls, params, run):
+        fmu = inspect_fmu(params["file"])
+        if run.event_driven and not fmu.variable_steps:
+            return [(("file",), f"{fmu.path.name} cannot handle variable communication steps, "
+                                "which run.event_driven needs (canHandleVariableCommunicationStepSize)")]
+        return []
+
+    @classmethod
     def slots(cls, params):
         if "file" not in params:
             return {"logic": ()}

@@ -145,11 +145,35 @@ def fmu_stepping() -> None:
               f"| {costs['fmi2'] / costs['python']:.1f} |")
 
 
+def event_latency() -> None:
+    import csv
+
+    print("\n## Sensor-to-actuator latency: light barrier → belt_drive FMU → belt (belt_ramp_fmu.yaml)\n")
+    print("| communication step | fixed grid | event-driven | removed |")
+    print("|---:|---:|---:|---:|")
+    scenario_file = ROOT / "scenarios" / "belt_ramp_fmu.yaml"
+    for step in (0.02, 0.1, 0.2):
+        latency = {}
+        for driven in (False, True):
+            scenario = load_scenario(scenario_file, {"run.communication_step": step, "run.event_driven": driven})
+            with tempfile.TemporaryDirectory() as tmp:
+                hub_run(scenario, Path(tmp))()
+                with open(Path(tmp) / "events.csv") as f:
+                    enter = next(float(e["time"]) for e in csv.DictReader(f) if e["slot"].endswith("on_enter"))
+                with open(Path(tmp) / "recording.csv") as f:
+                    react = next(float(r["time"]) for r in csv.DictReader(f)
+                                 if float(r["time"]) > enter and float(r["drive.logic.speed"]) < 0.5)
+            latency[driven] = react - enter
+        print(f"| {1000 * step:.0f} ms | {1000 * latency[False]:.0f} ms | {1000 * latency[True]:.0f} ms "
+              f"| {100 * (1 - latency[True] / latency[False]):.0f} % |")
+
+
 def main() -> int:
     print(f"planthub benchmark — median of {REPEATS} runs each, Python {sys.version.split()[0]}\n")
     rate_sweep()
     bottle_scaling()
     fmu_stepping()
+    event_latency()
     return 0
 
 

@@ -202,3 +202,41 @@ def test_check_fmu_names_an_unusable_file(tmp_path):
     proc = check_fmu(tmp_path / "x.fmu")
     assert proc.returncode == 1
     assert proc.stderr == f"planthub: {tmp_path / 'x.fmu'}: not an FMU (an FMU is a zip archive)\n"
+
+
+def first_response(data, event_time):
+    """Time at which the belt's speed command first reacts to the stop that the event caused."""
+    return next(float(r["time"]) for r in data
+                if float(r["time"]) > event_time and float(r["drive.logic.speed"]) < 0.5)
+
+
+def test_event_driven_points_cut_the_sensor_to_actuator_latency(fmus, tmp_path):
+    settings = {"run.communication_step": 0.2}
+    run_scenario(SCENARIO, tmp_path / "fixed", settings)
+    run_scenario(SCENARIO, tmp_path / "events", {**settings, "run.event_driven": True})
+    fixed, events = rows(tmp_path / "fixed" / "recording.csv"), rows(tmp_path / "events" / "recording.csv")
+    enter = [float(e["time"]) for e in rows(tmp_path / "events" / "events.csv") if e["slot"].endswith("on_enter")]
+    assert len(enter) == 1
+    # A communication point at the event's own tick, where the stop reaches the FMU's input.
+    at_event = next(r for r in events if float(r["time"]) == enter[0])
+    assert at_event["barrier.trigger.on_enter"] == "1"
+    # The regular grid is kept around the extra point.
+    assert {round(float(r["time"]), 9) for r in fixed} <= {round(float(r["time"]), 9) for r in events}
+    latency_fixed = first_response(fixed, enter[0]) - enter[0]
+    latency_events = first_response(events, enter[0]) - enter[0]
+    # The step after the event lasts one tick: the FMU's answer reaches the belt one tick later.
+    assert latency_events == pytest.approx(1 / 150)
+    assert latency_fixed > 0.2
+
+
+def test_event_driven_run_rejects_an_fmu_with_fixed_steps(fmus, write_scenario, tmp_path):
+    rewrite(fmus / "belt_drive-fmi2.fmu", tmp_path / "fixed.fmu", edit_xml=lambda x: x.replace(
+        'canHandleVariableCommunicationStepSize="true"', 'canHandleVariableCommunicationStepSize="false"'))
+    path = write_scenario("""
+        planthub: 1
+        run: {event_driven: true}
+        objects:
+          drive: {module: fmu, file: fixed.fmu}
+        """)
+    assert problems(path) == [f"{path}:4: objects.drive.file: fixed.fmu cannot handle variable communication "
+                              f"steps, which run.event_driven needs (canHandleVariableCommunicationStepSize)"]

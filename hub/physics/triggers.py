@@ -41,9 +41,10 @@ class VolumeTriggers:
         self._inside = np.zeros((len(self.boxes), self._inside.shape[1]), bool)
         return index
 
-    def evaluate(self, tick: int, positions: np.ndarray, radii: np.ndarray, half_heights: np.ndarray):
+    def evaluate(self, tick: int, positions: np.ndarray, radii: np.ndarray, half_heights: np.ndarray) -> bool:
+        """Compare occupancy with the previous tick and latch the changes; True if there was one."""
         if len(self) == 0:
-            return
+            return False
         local = self.boxes.local(positions)
         e = self.boxes.half_extents[:, None, :]
         gap = np.maximum(np.abs(local[..., :2]) - e[..., :2], 0.0)
@@ -53,13 +54,16 @@ class VolumeTriggers:
         previous = self._inside
         if previous.shape != inside.shape:
             previous = np.zeros_like(inside)
+        self._inside = inside
+        for t in np.nonzero(inside.any(axis=1))[0]:
+            self.latches[t].stayed = True
+        if np.array_equal(inside, previous):
+            return False
         for t, n in zip(*np.nonzero(inside & ~previous)):
             self.latches[t].entered.append((tick, int(n)))
         for t, n in zip(*np.nonzero(previous & ~inside)):
             self.latches[t].left.append((tick, int(n)))
-        for t in np.nonzero(inside.any(axis=1))[0]:
-            self.latches[t].stayed = True
-        self._inside = inside
+        return True
 
     def take(self, trigger: int) -> Latch:
         """Hand over what the trigger latched and start a new latch with the current occupancy."""

@@ -113,10 +113,14 @@ class PhysicsWorld:
             self._read_state()
             self.triggers.evaluate(self.tick, self.positions, self.radii, self.half_heights)
 
-    def step(self, substeps: int) -> None:
-        """Advance `substeps` ticks: force fields applied and triggers evaluated at every tick."""
+    def step(self, substeps: int, stop_on_event: bool = False) -> int:
+        """Advance up to `substeps` ticks: force fields applied and triggers evaluated at every tick.
+
+        With `stop_on_event`, stop after the first tick at which a trigger saw an object enter
+        or leave. Returns the number of ticks advanced.
+        """
         self.start()
-        for _ in range(substeps):
+        for done in range(1, substeps + 1):
             bodies, forces = self.fields.forces(self.positions, self.velocities, self.masses)
             positions = self.positions[bodies].tolist()
             for n, force, at in zip(bodies.tolist(), forces.tolist(), positions):
@@ -126,7 +130,10 @@ class PhysicsWorld:
             pybullet.stepSimulation(physicsClientId=self._client)
             self.tick += 1
             self._read_state()
-            self.triggers.evaluate(self.tick, self.positions, self.radii, self.half_heights)
+            event = self.triggers.evaluate(self.tick, self.positions, self.radii, self.half_heights)
+            if event and stop_on_event:
+                return done
+        return substeps
 
     def step_engine_only(self, substeps: int) -> None:
         """Only pybullet's own stepping, no state reads, fields or triggers: the floor for benchmarks."""
