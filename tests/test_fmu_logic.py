@@ -240,3 +240,33 @@ def test_event_driven_run_rejects_an_fmu_with_fixed_steps(fmus, write_scenario, 
         """)
     assert problems(path) == [f"{path}:4: objects.drive.file: fixed.fmu cannot handle variable communication "
                               f"steps, which run.event_driven needs (canHandleVariableCommunicationStepSize)"]
+
+
+@pytest.fixture(scope="module")
+def python_fmu(tmp_path_factory):
+    """tests/fmu_models/python/belt_drive_py.py exported by PythonFMU: an FMU another tool built."""
+    import subprocess
+    import sys
+
+    out = tmp_path_factory.mktemp("pythonfmu")
+    source = ROOT / "tests" / "fmu_models" / "python" / "belt_drive_py.py"
+    subprocess.run([sys.executable, "-m", "pythonfmu", "build", "-f", str(source), "-d", str(out)],
+                   check=True, capture_output=True)
+    return out / "belt_drive_py.fmu"
+
+
+def test_a_pythonfmu_export_replaces_the_c_fmu_bit_for_bit(fmus, python_fmu, tmp_path):
+    run_scenario(SCENARIO, tmp_path / "c")
+    run_scenario(SCENARIO, tmp_path / "python", {"objects.drive.file": str(python_fmu)})
+    for name in ("recording.csv", "events.csv"):
+        assert (tmp_path / "c" / name).read_bytes() == (tmp_path / "python" / name).read_bytes()
+    speeds = {r["drive.logic.speed"] for r in rows(tmp_path / "python" / "recording.csv")}
+    assert len(speeds) > 20   # the logic really ran: the ramp passes many values
+
+
+def test_check_fmu_reports_what_fmpy_validation_finds_in_a_third_party_fmu(fmus, python_fmu):
+    proc = check_fmu(python_fmu, "--like", fmus / "belt_drive-fmi2.fmu")
+    assert proc.returncode == 1
+    assert "  target slots  run (bool), speed_setpoint (real)\n" in proc.stdout
+    assert "  ✗ validation: ModelStructure/InitialUnknowns does not contain the expected set of variables." \
+        in proc.stdout
