@@ -172,27 +172,26 @@ class _Checker:
                         run, tuple(objects), tuple(flows), tuple(record), order)
 
     def run_settings(self, run: dict) -> RunSettings:
-        def number(key, default, kind=(int, float)):
-            value = run.get(key, default)
+        def setting(key, default, kind=(int, float)):
+            value = run.get(key)
             ok = isinstance(value, kind) and not isinstance(value, bool) and value > 0
-            return value if ok else default
-        rate = number("physics_rate", 150, int)
-        event_driven = run.get("event_driven") is True
-        run = {"duration": number("duration", 10), "seed": number("seed", 0, int),
-               **({"communication_step": run["communication_step"]} if number("communication_step", None) else {})}
+            return value if ok else default   # a bad value is already reported by the schema
+
+        rate = setting("physics_rate", 150, int)
+        step = setting("communication_step", None)
         substeps = 1
-        if "communication_step" in run:
-            exact = run["communication_step"] * rate
+        if step is not None:
+            exact = step * rate
             substeps = round(exact)
             if substeps < 1 or not math.isclose(exact, substeps, rel_tol=1e-9, abs_tol=1e-9):
                 lo, hi = max(1, math.floor(exact)), max(1, math.ceil(exact))
                 self.problem(("run", "communication_step"),
-                             f"{run['communication_step']} s is not a whole number of physics ticks at "
-                             f"{rate} Hz (nearest: {lo / rate:.6g} s = {lo} ticks, {hi / rate:.6g} s = {hi} ticks)")
+                             f"{step} s is not a whole number of physics ticks at {rate} Hz "
+                             f"(nearest: {lo / rate:.6g} s = {lo} ticks, {hi / rate:.6g} s = {hi} ticks)")
                 substeps = lo
-        ticks = round(run.get("duration", 10) * rate)
+        ticks = round(setting("duration", 10) * rate)
         end = max(1, math.ceil(ticks / substeps)) * substeps
-        return RunSettings(rate, substeps, end, run.get("seed", 0), event_driven)
+        return RunSettings(rate, substeps, end, setting("seed", 0, int), run.get("event_driven") is True)
 
     def objects(self, specs: dict):
         objects, tables, ids = [], {}, {}
