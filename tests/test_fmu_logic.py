@@ -270,3 +270,41 @@ def test_check_fmu_reports_what_fmpy_validation_finds_in_a_third_party_fmu(fmus,
     assert "  target slots  run (bool), speed_setpoint (real)\n" in proc.stdout
     assert "  ✗ validation: ModelStructure/InitialUnknowns does not contain the expected set of variables." \
         in proc.stdout
+
+
+def test_an_isolated_fmu_gives_the_same_recording(fmus, tmp_path):
+    run_scenario(SCENARIO, tmp_path / "in")
+    run_scenario(SCENARIO, tmp_path / "out", {"objects.drive.isolate": True})
+    assert (tmp_path / "in" / "recording.csv").read_bytes() == (tmp_path / "out" / "recording.csv").read_bytes()
+
+
+def counter_scene(write_scenario, fmu, isolate, extra="", objects="", flows=""):
+    return write_scenario(f"""
+        planthub: 1
+        run: {{duration: 1.0, physics_rate: 100, communication_step: 0.1}}
+        objects:
+          counter: {{module: fmu, file: {fmu}, isolate: {str(isolate).lower()}{extra}}}
+          {objects}
+        flows: [{flows}]
+        record: [counter.logic.steps]
+        """)
+
+
+def test_a_crashing_fmu_in_a_child_process_stops_the_run_with_its_name(faulty, write_scenario, tmp_path):
+    path = counter_scene(write_scenario, faulty / "faulty-fmi2.fmu", True, ", parameters: {crash_at: 4}")
+    with pytest.raises(SimulationError) as info:
+        run_scenario(path, tmp_path / "out")
+    assert str(info.value) == ("FMU instance 'counter' (faulty-fmi2.fmu) at t = 0.3 s: its worker process was "
+                               "killed by SIGSEGV; the run stops here, the recording so far is kept")
+    recorded = [r["counter.logic.steps"] for r in rows(tmp_path / "out" / "recording.csv")]
+    assert recorded == ["0", "1", "2", "3"]
+
+
+def test_a_failing_isolated_fmu_reports_like_an_in_process_one(faulty, write_scenario, tmp_path):
+    path = counter_scene(write_scenario, faulty / "faulty-fmi3.fmu", True,
+                         objects="fail: {module: constant, type: bool, value: true}",
+                         flows="{from: fail.value.out, to: counter.logic.fail, when: target}")
+    with pytest.raises(SimulationError) as info:
+        run_scenario(path, tmp_path / "out")
+    assert str(info.value).startswith("FMU instance 'counter' (faulty-fmi3.fmu) at t = 0 s: "
+                                      "fmi3DoStep returned error\n  FMU log:\n")
