@@ -13,8 +13,8 @@ class Component:
     Step hooks, called by the master in this order each communication step:
     `sense(tick)` writes sources from the world; `react()` (only for components that declare
     `FEEDTHROUGH`) computes sources from targets while flows are evaluated; `actuate()` reads
-    targets and applies them to the world; `step(t, h)` advances a logic component (an FMU)
-    over the communication step, before the physics does.
+    targets and applies them to the world; `step(tick, ticks)` advances a logic component
+    (an FMU) over the communication step that starts at `tick` and lasts `ticks`.
     """
 
     SLOTS: ClassVar[tuple[Slot, ...]] = ()
@@ -45,8 +45,9 @@ class Component:
     def actuate(self) -> None:
         """Apply this step's target values to the world (step 4 of the loop)."""
 
-    def step(self, t: float, h: float) -> None:
-        """Advance own logic from t to t + h; its new outputs are sensed at the next point."""
+    def step(self, tick: int, ticks: int) -> None:
+        """Advance own logic over [tick, tick + ticks] with the inputs of this point; its new
+        outputs are for the points that follow (sensed there, never earlier)."""
 
     def close(self) -> None:
         """Release what the component holds (FMU instances, processes)."""

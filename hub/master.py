@@ -96,9 +96,8 @@ class Master:
             end = min(end, until_tick)
         ticks = self.world.step(end - start, stop_on_event=run.event_driven)
         self._answering = start + ticks < end
-        t, h = start / run.physics_rate, ticks / run.physics_rate
         for comp in self._stepping:
-            comp.step(t, h)
+            comp.step(start, ticks)
 
     def run(self, until_tick: int | None = None, progress=None) -> RunResult:
         """Communicate at every point from now to `until_tick` (default: the scenario's end)."""

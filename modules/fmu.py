@@ -10,7 +10,9 @@ the steps a flow fed it (false otherwise); a Boolean output true makes the void 
 `map` renames variables to slot names. The FMU steps from t to t + h with the inputs it got at
 t; its outputs appear at the next communication point. With `isolate: true` the FMU runs in a
 child process: same results, one pipe round trip per step, and a crash of the FMU's code
-stops the run with a message naming it instead of taking the hub down.
+stops the run with a message naming it instead of taking the hub down. `step` gives the FMU
+its own, longer communication step (a whole number of the scenario's): it then steps only on
+its own grid, inputs sampled there and outputs held until its next point.
 """
 from __future__ import annotations
 
@@ -27,28 +29,44 @@ _SLOT_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
 class FmuLogic(Component):
-    def __init__(self, obj, name, slots, slave: FmuSlave, inputs, outputs):
+    """Steps its FMU over the master's communication steps, or over its own longer `every` ticks.
+
+    Jacobi in both cases: the FMU steps from t with the inputs it got at t, and its new outputs
+    are held back until the point at t + h, so the result does not depend on when the master
+    calls it in between.
+    """
+
+    def __init__(self, obj, name, slots, slave, inputs, outputs, rate: int, every: int | None):
         super().__init__(obj, name)
         self.SLOTS = slots
         self.slave = slave
         self.inputs = inputs      # [(slot name, is event)] in the FMU's input order
         self.outputs = outputs    # [(slot name, is event)] in the FMU's output order
+        self.rate = rate
+        self.every = every        # own step in ticks, or None: every master step
         self.latest = slave.outputs()
+        self.ready_at, self.ready = None, None   # outputs of the last step and the tick they belong to
 
     def sense(self, tick):
+        if self.ready_at is not None and tick >= self.ready_at:
+            self.latest, self.ready_at = self.ready, None
         for (slot, event), value in zip(self.outputs, self.latest):
             if not event:
                 self.emit(slot, value)
             elif value:
                 self.emit(slot)
 
-    def step(self, t, h):
+    def step(self, tick, ticks):
+        if self.every is not None:
+            if tick % self.every:
+                return   # between two of its own points: it already stepped over this interval
+            ticks = self.every
         signals, index = self.signals, self.index
         values = [signals.updated[index[slot]] if event else signals.values[index[slot]]
                   for slot, event in self.inputs]
         self.slave.set_inputs(values)
-        self.slave.step(t, h)
-        self.latest = self.slave.outputs()
+        self.slave.step(tick / self.rate, ticks / self.rate)
+        self.ready_at, self.ready = tick + ticks, self.slave.outputs()
 
     def close(self):
         self.slave.close()
@@ -67,6 +85,9 @@ class Fmu(Module):
                        "description": "Boolean inputs/outputs to expose as void (event) slots"},
             "map": {"type": "object", "additionalProperties": {"type": "string", "pattern": _SLOT_NAME.pattern},
                     "default": {}, "description": "variable name → slot name"},
+            "step": {"type": "number", "exclusiveMinimum": 0,
+                     "description": "the FMU's own communication step, s: a whole number of the scenario's; "
+                                    "default: the scenario's"},
             "isolate": {"type": "boolean", "default": False,
                         "description": "run the FMU in a child process: a crash stops the run cleanly"},
         },
@@ -113,9 +134,16 @@ class Fmu(Module):
     @classmethod
     def check_run(cls, params, run):
         fmu = inspect_fmu(params["file"])
-        if run.event_driven and not fmu.variable_steps:
+        if run.event_driven and not fmu.variable_steps and "step" not in params:
             return [(("file",), f"{fmu.path.name} cannot handle variable communication steps, "
-                                "which run.event_driven needs (canHandleVariableCommunicationStepSize)")]
+                                "which run.event_driven needs (canHandleVariableCommunicationStepSize); "
+                                "or give it its own fixed `step`")]
+        if "step" in params:
+            every = params["step"] * run.physics_rate / run.substeps
+            if round(every) < 1 or abs(every - round(every)) > 1e-9 * every:
+                master = run.substeps / run.physics_rate
+                return [(("step",), f"{params['step']} s is not a whole number of communication steps "
+                                    f"({master:.6g} s)")]
         return []
 
     @classmethod
@@ -145,5 +173,6 @@ class Fmu(Module):
         runner = IsolatedFmu if params["isolate"] else FmuSlave
         slave = runner(fmu, name, [v for _, v in inputs], [v for _, v in outputs], parameters)
         as_pairs = lambda pairs: [(s.name, s.type is SlotType.VOID) for s, _ in pairs]
+        every = round(params["step"] * world.rate) if "step" in params else None
         return {"logic": FmuLogic(name, "logic", tuple(s for s, _ in ports), slave,
-                                  as_pairs(inputs), as_pairs(outputs))}
+                                  as_pairs(inputs), as_pairs(outputs), world.rate, every)}

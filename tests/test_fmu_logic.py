@@ -239,7 +239,8 @@ def test_event_driven_run_rejects_an_fmu_with_fixed_steps(fmus, write_scenario, 
           drive: {module: fmu, file: fixed.fmu}
         """)
     assert problems(path) == [f"{path}:4: objects.drive.file: fixed.fmu cannot handle variable communication "
-                              f"steps, which run.event_driven needs (canHandleVariableCommunicationStepSize)"]
+                              f"steps, which run.event_driven needs (canHandleVariableCommunicationStepSize); "
+                              f"or give it its own fixed `step`"]
 
 
 @pytest.fixture(scope="module")
@@ -308,3 +309,24 @@ def test_a_failing_isolated_fmu_reports_like_an_in_process_one(faulty, write_sce
         run_scenario(path, tmp_path / "out")
     assert str(info.value).startswith("FMU instance 'counter' (faulty-fmi3.fmu) at t = 0 s: "
                                       "fmi3DoStep returned error\n  FMU log:\n")
+
+
+def test_an_fmu_with_its_own_step_samples_and_answers_on_its_grid(fmus, tmp_path):
+    run_scenario(SCENARIO, tmp_path, {"objects.drive.step": 0.1})
+    data = rows(tmp_path / "recording.csv")
+    speed = [(round(float(r["time"]), 9), float(r["drive.logic.speed"])) for r in data]
+    # While ramping up (0.5 m/s² over 0.1 s steps): 0.05 more at every 0.1 s, held in between.
+    for t, v in speed:
+        if t < 1.0:
+            assert v == pytest.approx(0.05 * int(t / 0.1 + 1e-9)), t
+
+
+def test_own_step_must_be_whole_master_steps(fmus, write_scenario):
+    path = write_scenario(f"""
+        planthub: 1
+        run: {{physics_rate: 150, communication_step: 0.02}}
+        objects:
+          drive: {{module: fmu, file: {fmus / 'belt_drive-fmi2.fmu'}, step: 0.05}}
+        """)
+    assert problems(path) == [f"{path}:4: objects.drive.step: 0.05 s is not a whole number of "
+                              f"communication steps (0.02 s)"]
