@@ -5,7 +5,8 @@ from pathlib import Path
 import fmpy
 import pytest
 
-from .fmu_support import REPO, TEST_MODELS_DIR, Instance, build
+from .fmu_support import REPO, TEST_MODELS_DIR, TEST_NETS_DIR, VERSIONS, Instance, build
+from .petri_support import PLANT_NETS, FMURunner, PythonRunner, load
 
 
 @pytest.fixture(scope="session")
@@ -36,3 +37,31 @@ def open_instance(tmp_path):
     yield open_
     for instance in opened:
         instance.close()
+
+
+@pytest.fixture(scope="session")
+def net_test_build(tmp_path_factory):
+    """The build directory of the test-only nets in tests/fmus/nets (and no models)."""
+    no_models = tmp_path_factory.mktemp("no_models")
+    return build(tmp_path_factory.mktemp("test_nets"), models_dir=no_models, nets_dir=TEST_NETS_DIR)
+
+
+@pytest.fixture(params=["python", "fmi2", "fmi3"])
+def run_net(request, open_instance):
+    """run_net(name, **start_values) -> a runner of that net on the interpreter or on one FMI version's FMU."""
+
+    def start(name, **start_values):
+        net = load(name)
+        if request.param == "python":
+            return PythonRunner(net, start_values)
+        build_dir = request.getfixturevalue("fmu_build" if name in PLANT_NETS else "net_test_build")
+        return FMURunner(open_instance(build_dir / f"{name}-{request.param}.fmu"), net, start_values)
+
+    return start
+
+
+@pytest.fixture(params=VERSIONS, ids=lambda v: f"fmi{v}")
+def plant_net(request, fmu_build, open_instance):
+    """plant_net(name, **start_values) -> the FMU of a net in fmus/nets, driven through fmpy."""
+    return lambda name, **start_values: FMURunner(
+        open_instance(fmu_build / f"{name}-fmi{request.param}.fmu"), load(name), start_values)

@@ -12,21 +12,29 @@ from fmpy.fmi3 import FMU3Slave
 REPO = Path(__file__).resolve().parents[2]
 FMUS_DIR = REPO / "fmus"
 TEST_MODELS_DIR = Path(__file__).resolve().parent / "models"
+TEST_NETS_DIR = Path(__file__).resolve().parent / "nets"
 MODELS = ("belt_drive", "timer")
+# Every net file in fmus/nets is an FMU: switch.pnml -> switch, robot_arm.net.yaml -> robot_arm.
+NETS = tuple(sorted(path.name.split(".")[0] for path in (FMUS_DIR / "nets").iterdir()
+                    if path.name.endswith((".pnml", ".net.yaml"))))
 VERSIONS = (2, 3)
 
 
-def run_make(build, *args, models_dir=None):
-    """Run fmus/Makefile with the interpreter running the tests; return the CompletedProcess."""
+def run_make(build, *args, models_dir=None, nets_dir=None):
+    """Run fmus/Makefile with the interpreter running the tests; return the CompletedProcess.
+
+    With models_dir given and no nets_dir, no nets are built: a test of other models need not wait for them."""
     command = ["make", "-C", str(FMUS_DIR), f"PYTHON={sys.executable}", f"BUILD={build}"]
     if models_dir is not None:
         command.append(f"MODELS_DIR={models_dir}")
+    if nets_dir is not None or models_dir is not None:
+        command.append(f"NETS_DIR={nets_dir or ''}")
     return subprocess.run(command + list(args), capture_output=True, text=True, timeout=300)
 
 
-def build(build_dir, models_dir=None):
+def build(build_dir, models_dir=None, nets_dir=None):
     """Run make and return build_dir; fail with make's output if it fails."""
-    result = run_make(build_dir, models_dir=models_dir)
+    result = run_make(build_dir, "-j2", models_dir=models_dir, nets_dir=nets_dir)
     assert result.returncode == 0, result.stdout + result.stderr
     return build_dir
 

@@ -8,19 +8,19 @@ import zipfile
 import pytest
 from fmpy.validation import validate_fmu
 
-from .fmu_support import FMUS_DIR, MODELS, VERSIONS, run_make
+from .fmu_support import FMUS_DIR, MODELS, NETS, VERSIONS, run_make
 
 PLATFORMS = {2: "linux64", 3: "x86_64-linux"}
 
 
 @pytest.mark.parametrize("version", VERSIONS)
-@pytest.mark.parametrize("model", MODELS)
+@pytest.mark.parametrize("model", MODELS + NETS)
 def test_fmu_passes_fmpy_validation(fmu_build, model, version):
     assert validate_fmu(str(fmu_build / f"{model}-fmi{version}.fmu")) == []
 
 
 @pytest.mark.parametrize("version", VERSIONS)
-@pytest.mark.parametrize("model", MODELS)
+@pytest.mark.parametrize("model", MODELS + NETS)
 def test_fmu_holds_description_and_binary_only(fmu_build, model, version):
     with zipfile.ZipFile(fmu_build / f"{model}-fmi{version}.fmu") as archive:
         names = archive.namelist()
