@@ -15,6 +15,7 @@ test: $(STAMP) fmus
 
 bench: $(STAMP) fmus
 	$(PY) -m tests.bench
+	$(PY) -m tests.fmus.bench_petri
 
 fmus: $(STAMP)
 	@if [ -f fmus/Makefile ]; then $(MAKE) --no-print-directory -C fmus PYTHON=$(abspath $(PY)) BUILD=$(abspath build/fmus); fi
