@@ -37,9 +37,15 @@ def main(argv=None) -> int:
     check_fmu.add_argument("--like", type=Path, metavar="REFERENCE.fmu",
                            help="also check it can replace this FMU (same inputs and outputs)")
 
+    report = sub.add_parser("report", help="run a set of scenarios and write a markdown report with plots")
+    report.add_argument("name", choices=["paper"], help="paper: the paper's three plausibility tests")
+    report.add_argument("--out", type=Path, help="folder for report.md, its plots and runs (default: runs/report_<name>)")
+    report.add_argument("--no-plots", action="store_true", help="write the numbers only (no matplotlib needed)")
+
     args = parser.parse_args(argv)
     try:
-        commands = {"run": _run, "validate": _validate, "describe": _describe, "check-fmu": _check_fmu}
+        commands = {"run": _run, "validate": _validate, "describe": _describe, "check-fmu": _check_fmu,
+                    "report": _report}
         return commands[args.command](args)
     except ScenarioError as exc:
         print(f"planthub: {exc}", file=sys.stderr)
@@ -50,6 +56,21 @@ def main(argv=None) -> int:
     except BrokenPipeError:   # output piped into `head` and the like
         sys.stderr.close()
         return 0
+
+
+def _report(args) -> int:
+    from importlib import import_module
+
+    from .reports import REPORTS
+
+    module, _, function = REPORTS[args.name].partition(":")
+    out = args.out or Path("runs") / f"report_{args.name}"
+    started = time.monotonic()
+    path = getattr(import_module(module), function)(
+        out, plots=not args.no_plots,
+        progress=lambda step: print(f"  {time.monotonic() - started:6.1f} s  {step}", file=sys.stderr))
+    print(f"planthub report {args.name}: {path}")
+    return 0
 
 
 def _add_set(parser) -> None:

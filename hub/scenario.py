@@ -34,12 +34,27 @@ def _list(value) -> list:
 
 
 @dataclass(frozen=True)
+class BusSettings:
+    """The scenario's `run.bus` section: how the hub joins Zenoh and treats participants."""
+
+    mode: str = "peer"                   # peer | client | router
+    listen: tuple[str, ...] = ()         # endpoints; none: a free loopback port
+    connect: tuple[str, ...] = ()
+    scouting: bool = False               # multicast scouting
+    lease: float = 1.0                   # s: a participant silent this long is lost
+    on_loss: str = "stop"                # stop | pause: what a lost participant does to the run
+    publish_period: float = 0.0          # s between data-plane samples nobody asked a rate for
+    expose: tuple[str, ...] = ("*",)     # slots on the data plane: patterns of object.component.slot
+
+
+@dataclass(frozen=True)
 class RunSettings:
     physics_rate: int        # ticks per second
     substeps: int            # physics ticks per communication step
     end_tick: int            # a whole number of communication steps
     seed: int
     event_driven: bool = False   # a trigger event ends the communication step at its tick
+    bus: BusSettings | None = None   # None: no `run.bus` section
 
     @property
     def dt(self) -> float:
@@ -114,6 +129,21 @@ def _resolve_paths(params: dict, schema: dict, base: Path) -> dict:
         if prop.get("x-path") and isinstance(out.get(key), str):
             out[key] = str((base / out[key]).resolve())
     return out
+
+
+def _bus_settings(bus: dict) -> BusSettings:
+    """The `run.bus` section (already checked by the schema) with defaults filled in."""
+    d = BusSettings()
+
+    def get(key, kind):   # a bad value is already reported by the schema: fall back to the default
+        value = bus.get(key)
+        ok = isinstance(value, kind) and not (isinstance(value, bool) and kind is not bool)
+        return value if ok else getattr(d, key)
+
+    strings = lambda key: tuple(x for x in get(key, (list, tuple)) if isinstance(x, str))
+    return BusSettings(get("mode", str), strings("listen"), strings("connect"), get("scouting", bool),
+                       float(get("lease", (int, float))), get("on_loss", str),
+                       float(get("publish_period", (int, float))), strings("expose"))
 
 
 def _scenario_schema() -> dict:
@@ -191,7 +221,8 @@ class _Checker:
                 substeps = lo
         ticks = round(setting("duration", 10) * rate)
         end = max(1, math.ceil(ticks / substeps)) * substeps
-        return RunSettings(rate, substeps, end, setting("seed", 0, int), run.get("event_driven") is True)
+        return RunSettings(rate, substeps, end, setting("seed", 0, int), run.get("event_driven") is True,
+                           _bus_settings(run["bus"]) if isinstance(run.get("bus"), dict) else None)
 
     def objects(self, specs: dict):
         objects, tables, ids = [], {}, {}
@@ -219,10 +250,28 @@ class _Checker:
                 if params["id"] in ids:
                     self.problem(at + ("id",), f"duplicate id {params['id']!r} (also used by object {ids[params['id']]!r})")
                 ids.setdefault(params["id"], name)
+            if self.references(at, params, module.PARAMETERS, {o.name: o.module_name for o in objects}):
+                continue
             objects.append(ObjectSpec(name, module, spec["module"], params))
             tables[name] = {(comp, s.name): s for comp, slots in module.slots(params).items() for s in slots}
         self.broken = set(specs) - set(tables)   # objects already reported: their slots are not judged
         return objects, tables
+
+    def references(self, at: tuple, params: dict, schema: dict, before: dict[str, str]) -> bool:
+        """Parameters marked `"x-object": [modules]` name an object of one of those modules declared
+        earlier in the file (a belt placed `after` another); report any that does not."""
+        bad = False
+        for key, prop in schema.get("properties", {}).items():
+            kinds, name = prop.get("x-object"), params.get(key)
+            if not kinds or not isinstance(name, str):
+                continue
+            if before.get(name) not in kinds:
+                candidates = [n for n, m in before.items() if m in kinds]
+                what = f"object {name!r} is a {before[name]}, not a {' or '.join(kinds)}" if name in before else \
+                    f"no {' or '.join(kinds)} {name!r} is declared before this object"
+                self.problem(at + (key,), what + did_you_mean(name, candidates))
+                bad = True
+        return bad
 
     def resolve(self, text: str, at: tuple, tables: dict, direction: Direction | None):
         """`obj.comp.slot` or `obj.slot` → (SlotRef, Slot), or None with a problem recorded."""

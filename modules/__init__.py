@@ -2,9 +2,19 @@
 
 CATALOGUE = {
     "bottle": "modules.bottle:Bottle",
+    "clock": "modules.clock:ClockModule",
     "connector": "modules.connector:Connector",
     "constant": "modules.constant:Constant",
     "conveyor": "modules.conveyor:Conveyor",
+    "curve": "modules.curve:Curve",
     "fmu": "modules.fmu:Fmu",
+    "id_reader": "modules.id_reader:IdReader",
     "light_barrier": "modules.light_barrier:LightBarrier",
+    "robot_arm": "modules.robot_arm:RobotArm",
+    "separator": "modules.separator:Separator",
+    "sink": "modules.sink:Sink",
+    "source": "modules.source:Source",
+    "station": "modules.station:Station",
+    "stopper": "modules.stopper:Stopper",
+    "switch": "modules.switch:Switch",
 }

@@ -12,15 +12,21 @@ t; its outputs appear at the next communication point. With `isolate: true` the 
 child process: same results, one pipe round trip per step, and a crash of the FMU's code
 stops the run with a message naming it instead of taking the hub down. `step` gives the FMU
 its own, longer communication step (a whole number of the scenario's): it then steps only on
-its own grid, inputs sampled there and outputs held until its next point.
+its own grid, inputs sampled there and outputs held until its next point. With
+`participant: launch` the hub starts `planthub serve-fmu` in a child process that serves the FMU
+over the Zenoh bus in lockstep; with `participant: join` it waits (`join_timeout`) for one
+started elsewhere, e.g. on another machine: `planthub serve-fmu FILE --run RUN --name OBJECT
+--connect tcp/HUB:PORT`. Same results as in-process, bit for bit.
 """
 from __future__ import annotations
 
 import re
+import sys
 
 from hub.component import Component
 from hub.fmu import FmuError, FmuSlave, inspect_fmu
 from hub.fmu_process import IsolatedFmu
+from hub.lockstep import RemoteSlave, RemoteSpec
 from hub.module import Module
 from hub.registry import did_you_mean
 from hub.slots import Slot, SlotType
@@ -33,7 +39,8 @@ class FmuLogic(Component):
 
     Jacobi in both cases: the FMU steps from t with the inputs it got at t, and its new outputs
     are held back until the point at t + h, so the result does not depend on when the master
-    calls it in between.
+    calls it in between. They are fetched only there (`slave.outputs()`), so logic served by a
+    participant computes while the hub goes on: the step is sent in `step`, collected in `sense`.
     """
 
     def __init__(self, obj, name, slots, slave, inputs, outputs, rate: int, every: int | None):
@@ -44,12 +51,12 @@ class FmuLogic(Component):
         self.outputs = outputs    # [(slot name, is event)] in the FMU's output order
         self.rate = rate
         self.every = every        # own step in ticks, or None: every master step
-        self.latest = slave.outputs()
-        self.ready_at, self.ready = None, None   # outputs of the last step and the tick they belong to
+        self.latest = None        # outputs in use; fetched at the first point
+        self.ready_at = None      # the tick at which the last step's outputs are due
 
     def sense(self, tick):
-        if self.ready_at is not None and tick >= self.ready_at:
-            self.latest, self.ready_at = self.ready, None
+        if self.latest is None or (self.ready_at is not None and tick >= self.ready_at):
+            self.latest, self.ready_at = self.slave.outputs(), None
         for (slot, event), value in zip(self.outputs, self.latest):
             if not event:
                 self.emit(slot, value)
@@ -66,7 +73,7 @@ class FmuLogic(Component):
                   for slot, event in self.inputs]
         self.slave.set_inputs(values)
         self.slave.step(tick / self.rate, ticks / self.rate)
-        self.ready_at, self.ready = tick + ticks, self.slave.outputs()
+        self.ready_at = tick + ticks
 
     def close(self):
         self.slave.close()
@@ -90,6 +97,11 @@ class Fmu(Module):
                                     "default: the scenario's"},
             "isolate": {"type": "boolean", "default": False,
                         "description": "run the FMU in a child process: a crash stops the run cleanly"},
+            "participant": {"enum": ["launch", "join"],
+                            "description": "serve the FMU over the bus: launch — the hub starts `planthub serve-fmu`; "
+                                           "join — one started elsewhere joins (default: in the hub)"},
+            "join_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
+                             "description": "s to wait for the participant to join (and to rejoin in a paused run)"},
         },
         "required": ["file"],
         "additionalProperties": False,
@@ -103,6 +115,9 @@ class Fmu(Module):
         except FmuError as exc:
             return [(("file",), str(exc))]
         problems = []
+        if params["isolate"] and "participant" in params:
+            problems.append((("isolate",), "isolate and participant exclude each other: a child process over a "
+                                           "pipe, or a participant over the bus"))
         variables = fmu.variables
         ports = {v.name for v in fmu.of("input") + fmu.of("output")}
         tunable = {v.name: v for v in fmu.of("parameter")}
@@ -164,14 +179,34 @@ class Fmu(Module):
         return out
 
     @classmethod
+    def serve_command(cls, params) -> list[str]:
+        """The command that serves this FMU over the bus (the object's name and the bus come from
+        the environment the hub sets; by hand, add --run, --name and --connect)."""
+        command = [sys.executable, "-m", "hub", "serve-fmu", params["file"]]
+        for name in params.get("events", ()):
+            command += ["--event", name]
+        for variable, slot in params.get("map", {}).items():
+            command += ["--map", f"{variable}={slot}"]
+        return command
+
+    @classmethod
+    def _remote(cls, name, params, fmu, inputs, outputs, parameters) -> RemoteSpec:
+        return RemoteSpec(name, tuple((s.name, s.type) for s, _ in inputs), tuple((s.name, s.type) for s, _ in outputs),
+                          parameters, tuple(cls.serve_command(params)) if params["participant"] == "launch" else None,
+                          None, float(params["join_timeout"]), f"FMU {fmu.path.name}")
+
+    @classmethod
     def build(cls, name, params, world):
         fmu = inspect_fmu(params["file"])
         ports = cls._ports(params, fmu)
         inputs = [(s, v) for s, v in ports if fmu.variables[v].causality == "input"]
         outputs = [(s, v) for s, v in ports if fmu.variables[v].causality == "output"]
         parameters = {k: fmu.variables[k].type.coerce(v) for k, v in params["parameters"].items()}
-        runner = IsolatedFmu if params["isolate"] else FmuSlave
-        slave = runner(fmu, name, [v for _, v in inputs], [v for _, v in outputs], parameters)
+        if "participant" in params:
+            slave = RemoteSlave(cls._remote(name, params, fmu, inputs, outputs, parameters), world.rate)
+        else:
+            runner = IsolatedFmu if params["isolate"] else FmuSlave
+            slave = runner(fmu, name, [v for _, v in inputs], [v for _, v in outputs], parameters)
         as_pairs = lambda pairs: [(s.name, s.type is SlotType.VOID) for s, _ in pairs]
         every = round(params["step"] * world.rate) if "step" in params else None
         return {"logic": FmuLogic(name, "logic", tuple(s for s, _ in ports), slave,

@@ -13,48 +13,9 @@ an object that enters and leaves between two communication points gives both eve
 """
 from __future__ import annotations
 
-import math
-
-from hub.component import Component
 from hub.module import Module
-from hub.slots import Slot
 
-from .params import POSITION, YAW
-
-
-class VolumeTrigger(Component):
-    SLOTS = (
-        Slot.source("on_enter", "void", "an object entered"),
-        Slot.source("on_stay", "void", "an object was inside"),
-        Slot.source("on_leave", "void", "an object left"),
-        Slot.source("object", "string", "id of the object that entered last"),
-        Slot.source("occupied", "bool", "an object is inside now"),
-    )
-
-    def __init__(self, obj, name, world, trigger):
-        super().__init__(obj, name)
-        self.world = world
-        self.trigger = trigger
-        self.latch = None
-
-    def sense(self, tick):
-        latch = self.latch = self.world.take_trigger(self.trigger)
-        labels = self.world.labels
-        if latch.entered:
-            self.emit("on_enter")
-            self.emit("object", labels[latch.entered[-1][1]])
-        if latch.stayed:
-            self.emit("on_stay")
-        if latch.left:
-            self.emit("on_leave")
-        self.emit("occupied", bool(latch.inside))
-
-    def events(self, tick):
-        labels = self.world.labels
-        for t, n in self.latch.entered:
-            yield t, "on_enter", labels[n]
-        for t, n in self.latch.left:
-            yield t, "on_leave", labels[n]
+from .trigger import VolumeTrigger, add_volume, volume_parameters
 
 
 class LightBarrier(Module):
@@ -62,13 +23,7 @@ class LightBarrier(Module):
 
     PARAMETERS = {
         "type": "object",
-        "properties": {
-            "position": {**POSITION, "description": "centre of the sensing volume, m"},
-            "yaw": YAW,
-            "size": {"type": "array", "items": {"type": "number", "exclusiveMinimum": 0},
-                     "minItems": 3, "maxItems": 3, "default": [0.005, 0.2, 0.02],
-                     "description": "extent along, across and up, m"},
-        },
+        "properties": volume_parameters([0.005, 0.2, 0.02], "sensing volume"),
         "required": ["position"],
         "additionalProperties": False,
     }
@@ -76,6 +31,4 @@ class LightBarrier(Module):
 
     @classmethod
     def build(cls, name, params, world):
-        half = [s / 2 for s in params["size"]]
-        trigger = world.add_trigger(params["position"], half, math.radians(params["yaw"]))
-        return {"trigger": VolumeTrigger(name, "trigger", world, trigger)}
+        return {"trigger": VolumeTrigger(name, "trigger", world, add_volume(world, params))}

@@ -17,6 +17,7 @@ from hub.plant import Plant
 from hub.recorder import Recorder
 from hub.scenario import load_scenario
 
+from .bench_plant import plant_elements
 from .helpers import ROOT
 from .test_belt_bottle_sensor import analytical_enter_time
 
@@ -168,12 +169,30 @@ def event_latency() -> None:
               f"| {100 * (1 - latency[True] / latency[False]):.0f} % |")
 
 
+def bottle_models() -> None:
+    from hub.reports.cost import lod_costs
+
+    bottles, ticks = 20, 450
+    print(f"\n## Bottle levels of detail: cost per physics tick, {bottles} bottles (150 Hz, {ticks} ticks)\n")
+    print("Physics world only (engine, belt field, state reads), beside the simple model from the same run.\n")
+    print("| model | shape | on a belt µs/tick | × simple | off every belt µs/tick | × simple |")
+    print("|---|---|---:|---:|---:|---:|")
+    costs = {(c.model, c.shape, c.on_belt): c.microseconds for c in lod_costs(bottles, ticks, REPEATS)}
+    for shape in ("cylinder", "hull"):
+        for model in ("simple", "base_point", "base_body"):
+            on, off = costs[(model, shape, True)], costs[(model, shape, False)]
+            print(f"| {model} | {shape} | {on:.0f} | {on / costs[('simple', shape, True)]:.2f} "
+                  f"| {off:.0f} | {off / costs[('simple', shape, False)]:.2f} |")
+
+
 def main() -> int:
     print(f"planthub benchmark — median of {REPEATS} runs each, Python {sys.version.split()[0]}\n")
     rate_sweep()
     bottle_scaling()
+    bottle_models()
     fmu_stepping()
     event_latency()
+    plant_elements()
     return 0
 
 

@@ -244,3 +244,23 @@ def test_override_into_a_non_mapping_is_named(write_scenario):
         """)
     found, _ = problems(path, {"objects.bottle.position.x": 1})
     assert found == [f"{path}: objects.bottle.position.x: override does not name a mapping entry"]
+
+
+def test_a_belt_placed_after_another_names_an_earlier_belt(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        objects:
+          belt_1: {module: conveyor, position: [0, 0, 0], length: 1}
+          lamp: {module: light_barrier, position: [0, 0, 0]}
+          bend: {module: curve, after: belt_l, turn: left, angle: 90, radius: 0.5}
+          bend2: {module: curve, after: lamp, turn: left, angle: 90, radius: 0.5}
+          early: {module: conveyor, after: late, length: 1}
+          late: {module: conveyor, position: [5, 0, 0], length: 1}
+        """)
+    found, _ = problems(path)
+    assert found == [
+        f"{path}:5: objects.bend.after: no conveyor or curve 'belt_l' is declared before this object "
+        f"(did you mean 'belt_1'?)",
+        f"{path}:6: objects.bend2.after: object 'lamp' is a light_barrier, not a conveyor or curve (known: belt_1)",
+        f"{path}:7: objects.early.after: no conveyor or curve 'late' is declared before this object (known: belt_1)",
+    ]

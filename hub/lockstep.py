@@ -1,0 +1,399 @@
+"""Lockstep: the hub's side of logic served by participants over the bus — join, step, collect, loss.
+
+Protocol (schemas/wire.md): a participant declares a liveliness token, announces itself with a
+hello naming its inputs and outputs, gets a welcome with its parameters and answers with its
+initial outputs. Every communication step the hub sends each participant a step message
+(step number, tick, ticks, t, h, inputs) and, before the outputs are used at the next point,
+waits for the output message tagged with that step number. Messages of different participants
+may arrive in any order; each is filed under its sender.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+from .bus import Bus, Inbox, local_endpoint
+from .errors import SimulationError
+from .launcher import Launched
+from .registry import did_you_mean
+from .slots import SlotType
+from . import wire
+
+
+@dataclass(frozen=True)
+class RemoteSpec:
+    """What the scenario expects of one participant."""
+
+    name: str                                   # the logic object's name, its name on the bus
+    inputs: tuple[tuple[str, SlotType], ...]    # in the scenario's order
+    outputs: tuple[tuple[str, SlotType], ...]
+    parameters: dict = field(default_factory=dict)
+    command: tuple[str, ...] | None = None      # the hub starts it, or None: it joins by itself
+    cwd: str | None = None
+    join_timeout: float = 10.0
+    detail: str = ""                            # how it is served, for messages: "FMU x.fmu"
+
+    @property
+    def label(self) -> str:
+        return f"participant {self.name!r}" + (f" ({self.detail})" if self.detail else "")
+
+
+class RemoteSlave:
+    """The FmuSlave interface (set_inputs, step, outputs, close) of logic a participant serves.
+
+    `step` only sends the step message; `outputs` waits for the answer. FmuLogic asks for the
+    outputs at the next communication point, so participants compute while the hub goes on, and
+    in parallel with each other.
+    """
+
+    def __init__(self, spec: RemoteSpec, rate: int):
+        self.spec = spec
+        self.rate = rate
+        self.instance = spec.name
+        self.link: Lockstep | None = None
+        self.sent = 0            # step messages sent; the next step's number
+        self._inputs = None
+
+    def set_inputs(self, values: list) -> None:
+        self._inputs = values
+
+    def step(self, t: float, h: float) -> None:
+        # FmuLogic passes t = tick / rate and h = ticks / rate: rounding recovers the integers exactly.
+        self._require().send_step(self, round(t * self.rate), round(h * self.rate), t, h, self._inputs)
+
+    def outputs(self) -> list:
+        return self._require().collect(self)
+
+    def _require(self) -> "Lockstep":
+        if self.link is None:
+            raise SimulationError(f"{self.spec.label} is served over the bus, "
+                                  f"but the run has not started its lockstep (use Master.run)")
+        return self.link
+
+    def close(self) -> None:
+        if self.link is not None:
+            self.link.release(self)
+
+
+@dataclass
+class _Peer:
+    slave: RemoteSlave
+    process: Launched | None = None
+    id: str | None = None              # the participant's own id, from its hello
+    welcomed: bool = False
+    ready: bool = False                # initial outputs received after the last welcome
+    lost: bool = False
+    in_order: list = field(default_factory=list)    # wire position → scenario input index
+    out_order: list = field(default_factory=list)   # scenario output index → wire position
+    result_n: int | None = None
+    result: list | None = None
+    pending: bytes | None = None       # the last step message, re-sent to a participant that rejoins
+    sent_at: float = 0.0
+    step_pub: object = None
+    welcome_pub: object = None
+
+    @property
+    def name(self) -> str:
+        return self.slave.spec.name
+
+
+class Lockstep:
+    """Coordinates every participant of one run on the bus (none is fine: the hub still shows
+    itself and its run state to viewers). `log(text)` receives notices such as a pause."""
+
+    def __init__(self, bus: Bus, run: str, slaves: list[RemoteSlave], *, lease: float, on_loss: str,
+                 rate: int, log=lambda text: None):
+        self.bus = bus
+        self.run = run
+        self.lease = lease
+        self.on_loss = on_loss
+        self.rate = rate
+        self.log = log
+        self.peers = {s.spec.name: _Peer(s) for s in slaves}
+        self.inbox = Inbox()
+        self.tick = 0
+        self._closing = False
+        self._token = None
+
+    # --- start: launch what the scenario launches, wait for everyone ------------------------
+    def start(self, tick: int = 0) -> None:
+        self.tick = tick
+        bus, run, inbox = self.bus, self.run, self.inbox
+        self._state = bus.publisher(wire.control_key(run, "state"), wire.MSGPACK)
+        bus.subscribe(wire.logic_key(run, "*", "hello"), lambda m: inbox.put(("hello", m)))
+        bus.watch_tokens(wire.logic_key(run, "*"), lambda m: inbox.put(("token", m)))
+        for name, peer in self.peers.items():
+            bus.subscribe_payloads(wire.logic_key(run, name, "output"),
+                                   lambda payload, name=name: inbox.put(("output", name, payload)))
+            peer.step_pub = bus.publisher(wire.logic_key(run, name, "step"), wire.MSGPACK)
+            peer.welcome_pub = bus.publisher(wire.logic_key(run, name, "welcome"), wire.MSGPACK)
+        self.publish_state("waiting" if self.peers else "running")
+        self._token = bus.declare_token(wire.hub_token(run))
+        for peer in self.peers.values():
+            peer.slave.link = self
+            if peer.slave.spec.command:
+                peer.process = self._launch(peer)
+        self._wait_ready(list(self.peers.values()), "join")
+        if self.peers:
+            self.publish_state("running")
+
+    def _launch(self, peer: _Peer) -> Launched:
+        spec = peer.slave.spec
+        connect = [local_endpoint(e) for e in self.bus.endpoints] + list(self.bus.settings.connect)
+        env = {"PLANTHUB_RUN": self.run, "PLANTHUB_NAME": spec.name, "PLANTHUB_CONNECT": ",".join(connect),
+               "PLANTHUB_LEASE": repr(self.lease), "PLANTHUB_JOIN_TIMEOUT": repr(spec.join_timeout)}
+        return Launched(spec.name, list(spec.command), spec.cwd, env)
+
+    def _wait_ready(self, peers: list[_Peer], verb: str) -> None:
+        """Wait until every peer in `peers` is welcomed and sent its initial outputs, each within its
+        join timeout; a launched process that ends first is reported with its last output lines."""
+        started = time.monotonic()
+        while True:
+            waiting = [p for p in peers if not p.ready]
+            if not waiting:
+                return
+            now = time.monotonic()
+            for peer in waiting:
+                self._check_process(peer, f"before it could {verb}")
+                if now - started >= peer.slave.spec.join_timeout:
+                    raise SimulationError(self._not_joined(peer, verb))
+            nearest = min(started + p.slave.spec.join_timeout for p in waiting) - now
+            item = self.inbox.get(min(0.05, nearest))
+            if item is not None:
+                self._dispatch(item)
+
+    def _not_joined(self, peer: _Peer, verb: str) -> str:
+        spec = peer.slave.spec
+        where = ", ".join(local_endpoint(e) for e in self.bus.endpoints) or ", ".join(self.bus.settings.connect)
+        started = (f"its command {' '.join(spec.command)!r} is running but did not announce itself"
+                   if peer.process else
+                   f"start it with the run name {self.run!r} and the hub's endpoint ({where or 'see run.bus'})")
+        seen = "; it said hello but sent no initial outputs" if peer.welcomed else ""
+        return (f"{spec.label} did not {verb} within {spec.join_timeout:g} s: {started}{seen}"
+                f"{self._tail(peer)}")
+
+    def _check_process(self, peer: _Peer, when: str) -> None:
+        if peer.process is None:
+            return
+        code = peer.process.poll()
+        if code is not None:
+            spec = peer.slave.spec
+            raise SimulationError(f"{spec.label}: its process {peer.process.how_it_ended(code)} "
+                                  f"{when}{self._tail(peer)}")
+
+    def _tail(self, peer: _Peer) -> str:
+        tail = peer.process.tail() if peer.process else ""
+        return f"\n  its output ends with:\n{tail}" if tail else ""
+
+    # --- stepping -------------------------------------------------------------------------
+    def send_step(self, slave: RemoteSlave, tick: int, ticks: int, t: float, h: float, values: list) -> None:
+        peer = self.peers[slave.spec.name]
+        inputs = slave.spec.inputs
+        wired = [wire.to_wire(inputs[i][1], values[i]) for i in peer.in_order]
+        peer.pending = wire.step_message(slave.sent, tick, ticks, t, h, wired)
+        slave.sent += 1
+        self.tick = tick
+        peer.sent_at = time.monotonic()
+        peer.step_pub.put(peer.pending)
+
+    def collect(self, slave: RemoteSlave) -> list:
+        """The outputs of the last step sent to `slave` (before any step: its initial outputs)."""
+        peer = self.peers[slave.spec.name]
+        want = slave.sent - 1
+        while peer.result_n != want:
+            item = self.inbox.get(peer.sent_at + self.lease - time.monotonic())
+            if item is not None:
+                self._dispatch(item)
+                continue
+            for item in self.inbox.drain():   # a slow hub may not have looked for a while
+                self._dispatch(item)
+            if peer.result_n != want:
+                self._lost(peer, f"did not answer step {want} within its lease of {self.lease:g} s: "
+                                 f"it is frozen or too slow (a longer run.bus.lease gives it more time)")
+        return peer.result
+
+    def poll(self) -> None:
+        """Handle whatever arrived, without waiting (a loss is noticed even between two collects)."""
+        for item in self.inbox.drain():
+            self._dispatch(item)
+
+    # --- what arrives -------------------------------------------------------------------------
+    def _dispatch(self, item) -> None:
+        kind = item[0]
+        if kind == "output":
+            self._output(item[1], item[2])
+        elif kind == "hello":
+            self._hello(item[1])
+        elif kind == "token":
+            message = item[1]
+            peer = self.peers.get(message.key.rsplit("/", 1)[-1])
+            if peer is not None and not message.alive and peer.welcomed and not self._closing:
+                self._lost(peer, self._gone(peer))
+
+    def _gone(self, peer: _Peer) -> str:
+        if peer.process is not None:
+            code = peer.process.poll(0.5)   # a killed process is gone before its token is
+            if code is not None:
+                return f"left the bus: its process {peer.process.how_it_ended(code)}"
+        return ("left the bus: its liveliness token went away (its process ended, froze longer than "
+                "its lease, or lost its connection)")
+
+    def _output(self, name: str, payload: bytes) -> None:
+        peer = self.peers[name]
+        try:
+            message = wire.unpack(payload)
+            if isinstance(message, dict) and "error" in message:
+                self._fail(peer, f"failed in step {message.get('step')}: {message['error']}")
+            if not (isinstance(message, list) and len(message) == 2 and isinstance(message[0], int)
+                    and isinstance(message[1], list)):
+                raise wire.WireError(f"expected [n, outputs], got {message!r}")
+            n, values = message
+            outputs = peer.slave.spec.outputs
+            if len(values) != len(outputs):
+                raise wire.WireError(f"step {n}: {len(values)} outputs, announced {len(outputs)}")
+            if n == -1:
+                peer.ready = peer.welcomed
+                if peer.slave.sent:   # rejoined mid-run: its step results count, not these
+                    return
+            elif n != peer.slave.sent - 1:
+                return   # an answer to a step the hub no longer waits for (re-sent after a rejoin)
+            peer.result = [wire.from_wire(kind, values[peer.out_order[i]], f"output {slot!r} of step {n}")
+                           for i, (slot, kind) in enumerate(outputs)]
+            peer.result_n = n
+        except wire.WireError as exc:
+            self._fail(peer, f"sent a bad output message: {exc}")
+
+    def _hello(self, message) -> None:
+        name = message.key.split("/")[-2]
+        peer = self.peers.get(name)
+        try:
+            hello = wire.unpack(message.payload)
+            if not isinstance(hello, dict) or hello.get("protocol") != wire.PROTOCOL:
+                raise wire.WireError(f"expected a hello map with protocol {wire.PROTOCOL}, got {hello!r}")
+            ident = hello.get("id")
+            if not isinstance(ident, str):
+                raise wire.WireError("the hello has no string `id`")
+            inputs = wire.read_interface(hello.get("inputs"), "inputs")
+            outputs = wire.read_interface(hello.get("outputs"), "outputs")
+        except wire.WireError as exc:
+            self._welcome(name, None, error=f"bad hello: {exc}")
+            return
+        if peer is None:
+            self._welcome(name, ident, error=f"run {self.run!r} has no participant {name!r}"
+                                             f"{did_you_mean(name, self.peers)}")
+            self.log(f"refused participant {name!r}: the scenario has no such logic object")
+            return
+        if peer.welcomed and not peer.lost:
+            if ident == peer.id:
+                self._welcome(name, ident)   # its welcome was lost: say it again
+            else:
+                self._welcome(name, ident, error=f"participant {name!r} is already on the bus (id {peer.id})")
+            return
+        problems = _misfit(peer.slave.spec, inputs, outputs)
+        if problems:
+            error = f"{peer.slave.spec.label} does not fit the scenario: " + "; ".join(problems)
+            self._welcome(name, ident, error=error)
+            raise SimulationError(error)
+        in_names = [n for n, _ in inputs]
+        out_names = [n for n, _ in outputs]
+        spec = peer.slave.spec
+        peer.in_order = [[n for n, _ in spec.inputs].index(n) for n in in_names]
+        peer.out_order = [out_names.index(n) for n, _ in spec.outputs]
+        peer.id, peer.welcomed, peer.ready, peer.lost = ident, True, False, False
+        peer.sent_at = time.monotonic()
+        self._welcome(name, ident)
+
+    def _welcome(self, name: str, ident: str | None, error: str | None = None) -> None:
+        if error is None:
+            body = {"protocol": wire.PROTOCOL, "id": ident, "accepted": True, "run": self.run, "rate": self.rate,
+                    "tick": self.tick, "time": self.tick / self.rate, "lease": self.lease,
+                    "parameters": self.peers[name].slave.spec.parameters}
+        else:
+            body = {"protocol": wire.PROTOCOL, "id": ident, "accepted": False, "error": error}
+        publisher = self.peers[name].welcome_pub if name in self.peers else None
+        if publisher is not None:
+            publisher.put(wire.pack(body))
+        else:
+            self.bus.put(wire.logic_key(self.run, name, "welcome"), wire.pack(body), wire.MSGPACK)
+
+    # --- loss -------------------------------------------------------------------------------
+    def _where(self) -> str:
+        return f"at t = {self.tick / self.rate:.9g} s"
+
+    def _fail(self, peer: _Peer, reason: str) -> None:
+        spec = peer.slave.spec
+        raise SimulationError(f"{spec.label} {reason} ({self._where()}); "
+                              f"the run stops here, the recording so far is kept")
+
+    def _lost(self, peer: _Peer, reason: str) -> None:
+        peer.lost = True
+        if self.on_loss != "pause" or self._closing:
+            self._fail(peer, reason)
+        self._pause(peer, reason)
+
+    def _pause(self, peer: _Peer, reason: str) -> None:
+        spec = peer.slave.spec
+        text = f"{spec.label} {reason} ({self._where()})"
+        self.publish_state("paused", text)
+        self.log(f"paused: {text}; waiting up to {spec.join_timeout:g} s for it to rejoin")
+        peer.welcomed = peer.ready = False
+        if peer.process is not None:
+            peer.process.stop(grace=0.0)
+            peer.process = self._launch(peer)
+        self._wait_ready([peer], "rejoin")
+        if peer.pending is not None and peer.result_n != peer.slave.sent - 1:
+            peer.sent_at = time.monotonic()
+            peer.step_pub.put(peer.pending)
+        self.publish_state("running")
+        self.log(f"resumed: {spec.label} rejoined")
+
+    # --- the end ------------------------------------------------------------------------------
+    def publish_state(self, state: str, reason: str = "") -> None:
+        self._state.put(wire.pack({"state": state, "tick": self.tick, "time": self.tick / self.rate,
+                                   "reason": reason}))
+
+    def release(self, slave: RemoteSlave) -> None:
+        slave.link = None
+
+    def close(self, reason: str = "") -> None:
+        """Tell everyone the run stopped, then make sure every launched process has ended."""
+        if self._closing:
+            return
+        self._closing = True
+        try:
+            if not self.bus.closed and hasattr(self, "_state"):
+                self.publish_state("stopped", reason)
+        finally:
+            for peer in self.peers.values():
+                peer.slave.link = None
+                if peer.process is not None:
+                    peer.process.stop(grace=0.0 if peer.lost else 3.0)
+            if self._token is not None:
+                self._token.undeclare()
+
+
+def _misfit(spec: RemoteSpec, inputs, outputs) -> list[str]:
+    """Differences between what the scenario expects and what a participant announced."""
+    problems = []
+    for label, want, have in (("input", spec.inputs, inputs), ("output", spec.outputs, outputs)):
+        have_map, want_map = dict(have), dict(want)
+        for name, kind in want:
+            if name not in have_map:
+                problems.append(f"it lacks {label} {name!r} ({kind.value})")
+            elif have_map[name] is not kind:
+                problems.append(f"its {label} {name!r} is {have_map[name].value}, the scenario's is {kind.value}")
+        for name, kind in have:
+            if name not in want_map:
+                problems.append(f"its {label} {name!r} ({kind.value}) is not in the scenario"
+                                f"{did_you_mean(name, want_map)}")
+        if len(have_map) != len(have):
+            problems.append(f"it announces an {label} twice")
+    return problems
+
+
+def pid_of(slave: RemoteSlave) -> int | None:
+    """The process id of a launched participant (tests kill it), or None."""
+    link = slave.link
+    peer = link.peers.get(slave.spec.name) if link else None
+    return peer.process.pid if peer and peer.process else None
+

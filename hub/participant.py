@@ -1,0 +1,254 @@
+"""The Python participant library: serve a piece of logic to a running plant over the bus, in lockstep.
+
+    from hub.participant import Participant, serve
+
+    class Doubler(Participant):
+        inputs = {"x": "real"}
+        outputs = {"y": "real"}
+
+        def step(self, t, h):
+            self.y = 2 * self.x
+
+    raise SystemExit(serve(Doubler()))
+
+Inputs, outputs and parameters are attributes: the hub's values are set before every `step`,
+the outputs read after it. Where to connect comes from the command line (`--run`, `--name`,
+`--connect`, `--mode`, `--lease`) or, for a process the hub launched, from its environment.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+import traceback
+import uuid
+from typing import ClassVar
+
+from .bus import Bus, Inbox
+from .errors import PlanthubError
+from .scenario import BusSettings
+from .slots import SlotType
+from . import wire
+
+_RESERVED = {"inputs", "outputs", "parameters", "start", "step", "close", "interface", "begin", "advance",
+             "current_outputs"}
+
+
+class Participant:
+    """Base of a participant's logic. Declare `inputs` and `outputs` (name → slot type: void, bool,
+    int, real, vec3, quat, string) and default `parameters`; write `step(t, h)`.
+
+    A void input is True in the steps a flow fed it; a void output set True fires the event.
+    Outputs start at their type's initial value (0, False, …) unless `start` sets them.
+    """
+
+    inputs: ClassVar[dict[str, str]] = {}
+    outputs: ClassVar[dict[str, str]] = {}
+    parameters: ClassVar[dict] = {}
+
+    def start(self) -> None:
+        """Called when the hub has welcomed this participant and set its parameters."""
+
+    def step(self, t: float, h: float) -> None:
+        """Advance from t to t + h with the inputs (attributes) of t; set the outputs (attributes)."""
+
+    def close(self) -> None:
+        """Called once when the run is over."""
+
+    # --- what the protocol loop calls; an adapter (an FMU, another language's binding) overrides these
+    def interface(self) -> tuple[list[tuple[str, SlotType]], list[tuple[str, SlotType]]]:
+        problems = []
+        pairs = []
+        for label, table in (("input", self.inputs), ("output", self.outputs)):
+            group = []
+            for name, kind in table.items():
+                if name in _RESERVED or name.startswith("_"):
+                    problems.append(f"{label} {name!r} collides with a Participant attribute")
+                try:
+                    group.append((name, SlotType(kind)))
+                except ValueError:
+                    problems.append(f"{label} {name!r} has type {kind!r}; slot types are "
+                                    f"{', '.join(t.value for t in SlotType)}")
+            pairs.append(group)
+        if problems:
+            raise PlanthubError(f"{type(self).__name__}: " + "; ".join(problems))
+        self._in, self._out = pairs
+        return pairs[0], pairs[1]
+
+    def begin(self, parameters: dict, time: float) -> None:
+        for name, value in {**self.parameters, **parameters}.items():
+            setattr(self, name, value)
+        for name, kind in self._in + self._out:
+            if not hasattr(self, name):
+                setattr(self, name, False if kind is SlotType.VOID else kind.initial())
+        self.start()
+
+    def advance(self, t: float, h: float, values: list) -> list:
+        for (name, kind), value in zip(self._in, values):
+            setattr(self, name, wire.from_wire(kind, value, f"input {name!r}"))
+        self.step(t, h)
+        return self.current_outputs()
+
+    def current_outputs(self) -> list:
+        out = []
+        for name, kind in self._out:
+            value = getattr(self, name)
+            if kind is SlotType.VOID:
+                setattr(self, name, False)   # an event fires once
+            out.append(wire.to_wire(kind, value))
+        return out
+
+
+def options(argv=None, description: str = "") -> argparse.Namespace:
+    """Where to join: command-line options, defaulting to what a launching hub put in the environment."""
+    env = os.environ.get
+    parser = argparse.ArgumentParser(description=description or "a planthub participant")
+    parser.add_argument("--run", default=env("PLANTHUB_RUN"), help="the run's name (the scenario's name)")
+    parser.add_argument("--name", default=env("PLANTHUB_NAME"), help="the logic object this participant serves")
+    parser.add_argument("--connect", action="append", metavar="ENDPOINT",
+                        help="the hub's (or a router's) endpoint, e.g. tcp/192.168.1.5:7447; repeatable")
+    parser.add_argument("--mode", default=env("PLANTHUB_MODE", "peer"), choices=["peer", "client"])
+    parser.add_argument("--lease", type=float, default=float(env("PLANTHUB_LEASE", "1.0")),
+                        help="s after which the hub declares this process frozen")
+    parser.add_argument("--join-timeout", type=float, default=float(env("PLANTHUB_JOIN_TIMEOUT", "30")),
+                        help="s to wait for the hub (and for it to come back after a lost connection)")
+    args, _ = parser.parse_known_args(argv)
+    if not args.connect:
+        args.connect = [e for e in env("PLANTHUB_CONNECT", "").split(",") if e]
+    missing = [o for o in ("run", "name") if not getattr(args, o)]
+    if missing:
+        parser.error(f"give {' and '.join('--' + o for o in missing)} (or start me from a scenario)")
+    return args
+
+
+def serve(logic: Participant, argv=None) -> int:
+    """Serve `logic` until the run stops; the exit status: 0 when the run ended, 1 on an error."""
+    args = options(argv, (type(logic).__doc__ or "").strip().splitlines()[0] if type(logic).__doc__ else "")
+    try:
+        with _Link(logic, args) as link:
+            return link.serve()
+    except PlanthubError as exc:
+        print(f"planthub participant {args.name!r}: {exc}", file=sys.stderr)
+        return 1
+
+
+class _Link:
+    """One participant's session with the hub: hello, welcome, then steps until the run stops."""
+
+    def __init__(self, logic: Participant, args):
+        self.logic, self.args = logic, args
+        self.run, self.name = wire.check_run_name(args.run), args.name
+        self.inputs, self.outputs = logic.interface()
+        self.id = uuid.uuid4().hex
+        self.inbox = Inbox()
+        settings = BusSettings(mode=args.mode, connect=tuple(args.connect), lease=args.lease)
+        self.bus = Bus(settings, listen=False)
+        self.hub_alive = False
+        self.last = None          # (step number, output message) of the last step served
+
+    def __enter__(self):
+        bus, inbox, key = self.bus, self.inbox, lambda *p: wire.logic_key(self.run, self.name, *p)
+        try:
+            bus.subscribe_payloads(key("welcome"), lambda p: inbox.put(("welcome", p)))
+            bus.subscribe_payloads(key("step"), lambda p: inbox.put(("step", p)))
+            bus.subscribe_payloads(wire.control_key(self.run, "state"), lambda p: inbox.put(("state", p)))
+            bus.watch_tokens(wire.hub_token(self.run), lambda m: inbox.put(("hub", m.alive)))
+            self.output = bus.publisher(key("output"), wire.MSGPACK)
+            self.hello = bus.publisher(key("hello"), wire.MSGPACK)
+            bus.declare_token(key())
+        except BaseException:
+            bus.close()
+            raise
+        return self
+
+    def __exit__(self, *exc):
+        try:
+            self.logic.close()
+        finally:
+            self.bus.close()
+
+    def serve(self) -> int:
+        self._join()
+        while True:
+            item = self._next(self.args.join_timeout)
+            kind = item[0]
+            if kind == "step":
+                self._step(item[1])
+            elif kind == "stopped":
+                return 0
+            elif kind == "rejoin":
+                self._join()
+
+    def _next(self, hub_grace: float):
+        """The next step, or ("stopped",) / ("rejoin",); the hub's absence is bounded by `hub_grace`."""
+        lost_at = None if self.hub_alive else time.monotonic()
+        while True:
+            item = self.inbox.get(1.0)
+            if item is None:
+                if lost_at is not None and time.monotonic() - lost_at > hub_grace:
+                    raise PlanthubError(f"the hub of run {self.run!r} went away and did not come back "
+                                        f"within {hub_grace:g} s")
+                continue
+            kind, value = item
+            if kind == "step":
+                return item
+            if kind == "state" and wire.unpack(value).get("state") == "stopped":
+                return ("stopped",)
+            if kind == "hub":
+                self.hub_alive = value
+                if value and lost_at is not None:
+                    return ("rejoin",)   # it came back (a broken connection healed): say hello again
+                if not value:
+                    lost_at = time.monotonic()
+
+    def _join(self) -> None:
+        """Wait for the hub, say hello until welcomed, start the logic, send the initial outputs."""
+        limit = self.args.join_timeout
+        deadline = time.monotonic() + limit
+        hello = wire.pack({"protocol": wire.PROTOCOL, "name": self.name, "id": self.id, "agent": wire.AGENT,
+                           "inputs": wire.interface(self.inputs), "outputs": wire.interface(self.outputs)})
+        sent_at = None
+        while True:
+            now = time.monotonic()
+            if now > deadline:
+                where = ", ".join(self.args.connect) or "no --connect endpoint"
+                state = "no welcome from it" if self.hub_alive else "no hub seen"
+                raise PlanthubError(f"{state} within {limit:g} s (run {self.run!r}, {where})")
+            if self.hub_alive and (sent_at is None or now - sent_at > 0.5):
+                self.hello.put(hello)   # repeated: the hub may not have been listening yet
+                sent_at = now
+            item = self.inbox.get(0.1)
+            if item is None:
+                continue
+            kind, value = item
+            if kind == "hub":
+                self.hub_alive, sent_at = value, None
+            elif kind == "welcome":
+                welcome = wire.unpack(value)
+                if welcome.get("id") != self.id:
+                    continue   # meant for another process under this name
+                if not welcome.get("accepted"):
+                    raise PlanthubError(f"the hub refused me: {welcome.get('error')}")
+                break
+            elif kind == "state" and wire.unpack(value).get("state") == "stopped" and self.last is not None:
+                raise PlanthubError("the run stopped before I could rejoin")
+        if self.last is None:
+            self.logic.begin(dict(welcome.get("parameters") or {}), float(welcome.get("time", 0.0)))
+        self.output.put(wire.output_message(-1, self.logic.current_outputs() if self.last is None
+                                            else wire.unpack(self.last[1])[1]))
+
+    def _step(self, payload: bytes) -> None:
+        n, _tick, _ticks, t, h, values = wire.read_step(payload)
+        if self.last is not None and self.last[0] == n:
+            self.output.put(self.last[1])   # asked again after a rejoin: the same answer
+            return
+        try:
+            outputs = self.logic.advance(t, h, values)
+        except Exception as exc:
+            detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+            self.output.put(wire.error_message(n, detail))
+            raise PlanthubError(f"step {n} failed: {detail}") from exc
+        message = wire.output_message(n, outputs)
+        self.last = (n, message)
+        self.output.put(message)

@@ -1,0 +1,169 @@
+"""What every belt segment (straight `conveyor`, `curve`) shares: its drive, its parameters, and how it is placed and built.
+
+| slot                  | type | dir    | meaning                                                |
+|-----------------------|------|--------|--------------------------------------------------------|
+| drive.speed           | real | target | target belt speed, m/s (negative runs backwards)       |
+| drive.run             | bool | target | true runs the belt, false stops it (speed kept)        |
+| drive.running         | bool | source | whether the belt runs, every step                      |
+| drive.velocity        | real | source | speed the field drives bottles to now, m/s, every step |
+
+Placing: a segment starts at `position` heading `yaw`, or `after: NAME` — where the belt NAME
+(declared before it) ends, heading on. Chained segments share their end point exactly, their
+force-field regions abut there (a bottle is handed over at one point, see
+hub/physics/fields.py), their guard rails meet there, and their floors merge into one box (see
+hub/physics/supports.py), so a bottle crosses the seam without a bump.
+"""
+from __future__ import annotations
+
+import math
+
+from hub.component import Component
+from hub.errors import Problem, ScenarioError
+from hub.physics.frames import Arc, Pose, Straight
+from hub.registry import did_you_mean
+from hub.slots import Slot
+
+from .params import POSITION, length
+
+RAIL_THICKNESS = 0.01
+SUPPORT_THICKNESS = 0.02
+K_DEFAULT = 16.0
+
+
+class BeltDrive(Component):
+    SLOTS = (
+        Slot.target("speed", "real", "target belt speed, m/s"),
+        Slot.target("run", "bool", "true runs the belt, false stops it"),
+        Slot.source("running", "bool", "whether the belt runs"),
+        Slot.source("velocity", "real", "speed the field drives bottles to now, m/s"),
+    )
+
+    def __init__(self, obj, name, world, field, speed, running):
+        super().__init__(obj, name)
+        self.world = world
+        self.field = field
+        self.speed = speed
+        self.running = running
+
+    def sense(self, tick):
+        self.emit("running", self.running)
+        self.emit("velocity", self.speed if self.running else 0.0)
+
+    def actuate(self):
+        if self.updated("speed"):
+            self.speed = self.value("speed")
+        if self.updated("run"):
+            self.running = self.value("run")
+        self.world.set_field_speed(self.field, self.speed if self.running else 0.0)
+
+
+PLACEMENT = {
+    "position": {**POSITION, "description": "start of the belt's centre line on its surface, m (or give `after`)"},
+    "yaw": {"type": "number", "description": "heading at the start, degrees (default 0; not with `after`)"},
+    "after": {"type": "string", "pattern": "^[A-Za-z_][A-Za-z0-9_]*$", "x-object": ["conveyor", "curve"],
+              "description": "start where this belt (declared before) ends, heading on"},
+}
+
+COMMON = {
+    "width": length(0.1, "clear width between the guard rails, m"),
+    "speed": {"type": "number", "default": 0.5, "description": "belt speed on the centre line, m/s"},
+    "k": {"type": "number", "exclusiveMinimum": 0,
+          "description": f"force-field rate 1/s, force scaled by the bottle's mass (default {K_DEFAULT:g})"},
+    "gain": {"type": "number", "exclusiveMinimum": 0,
+             "description": "instead of k: the paper's unscaled law F = gain·(v_tar − v), N·s/m"},
+    "grip": {"enum": ["surface", "along"], "default": "surface",
+             "description": "surface: friction on both horizontal components towards the moving belt "
+                            "surface (a curve turns the bottle); along: only along the belt (the paper)"},
+    "running": {"type": "boolean", "default": True},
+    "rail_height": length(0.04, "guard rail height above the surface, m"),
+    "field_height": length(0.3, "height of the force-field region above the surface, m"),
+}
+
+
+def check_placement(params) -> list[tuple[tuple, str]]:
+    """Problems of position/yaw/after and k/gain that the schema cannot express."""
+    problems = []
+    if "after" in params:
+        for key in ("position", "yaw"):
+            if key in params:
+                problems.append(((key,), f"give either `after` or `{key}`: a belt placed after "
+                                         f"{params['after']!r} starts where that belt ends"))
+    elif "position" not in params:
+        problems.append(((), "needs `position` (start of its centre line) or `after` (the belt it continues)"))
+    if "k" in params and "gain" in params:
+        problems.append((("gain",), "give `k` (rate 1/s, force scaled by mass) or `gain` "
+                                    "(the paper's unscaled law, N·s/m), not both"))
+    return problems
+
+
+def start_pose(name: str, params: dict, world) -> Pose:
+    if "after" in params:
+        previous = params["after"]
+        if previous not in world.anchors:
+            raise ScenarioError([Problem(f"objects.{name}", None, "after",
+                                         f"no belt {previous!r} is declared before {name!r}"
+                                         f"{did_you_mean(previous, world.anchors)}")])
+        return world.anchors[previous]
+    x, y, z = params["position"]
+    return Pose(float(x), float(y), float(z), math.radians(params.get("yaw", 0.0)))
+
+
+def build_segment(name: str, params: dict, world, line: Straight | Arc) -> dict[str, Component]:
+    """Floor, guard rails, force field and end anchor of one belt segment along `line`."""
+    z, half = line.start.z, params["width"] / 2.0
+    world.add_support(z, line.footprint(half + RAIL_THICKNESS), SUPPORT_THICKNESS)
+    height = params["rail_height"]
+    if isinstance(line, Straight):
+        for centre, half_extents, yaw in straight_rails(line, half, height):
+            world.add_static_box(centre, half_extents, yaw)
+    else:
+        for side in (1, -1):
+            world.add_static_boxes(*arc_rail(line, side, half, height, params["rail_tolerance"]))
+    if "gain" in params:
+        rate, per_mass = params["gain"], False
+    else:
+        rate, per_mass = params.get("k", K_DEFAULT), True
+    speed, running = params["speed"], params["running"]
+    # The field reaches a little below the surface: a bottle rides ~2 mm deep in it at 150 Hz,
+    # and a bottle gripped at its base must still be found inside.
+    field = world.add_belt_field(line, half, z - SUPPORT_THICKNESS, z + params["field_height"], rate,
+                                 speed if running else 0.0, params["grip"], per_mass)
+    world.anchors[name] = line.end
+    return {"drive": BeltDrive(name, "drive", world, field, speed, running)}
+
+
+def straight_rails(line: Straight, half_width: float, height: float):
+    """(centre, half extents, yaw) of the two rail boxes, inner faces at ±half_width."""
+    s = line.pose_at(line.length / 2)
+    lx, ly = s.left
+    out = []
+    for side in (1, -1):
+        offset = side * (half_width + RAIL_THICKNESS / 2)
+        out.append(((s.x + lx * offset, s.y + ly * offset, s.z + height / 2),
+                    (line.length / 2, RAIL_THICKNESS / 2, height / 2), s.yaw))
+    return out
+
+
+def arc_rail(arc: Arc, side: int, half_width: float, height: float, tolerance: float):
+    """(centres, half extents, yaws) of the boxes of one rail along an arc (side +1 left, −1 right).
+
+    The rail's face towards the belt is a polygon inscribed in the circle at ±half_width from the
+    centre line, fine enough that it strays at most `tolerance` from that circle; each box lies
+    behind its chord, away from the belt. Adjacent faces meet exactly at the polygon's corners,
+    and the first and last corner are where the straight rails of the neighbouring belts end,
+    so a bottle sliding along a rail meets no protruding edge.
+    """
+    cx, cy = arc.centre
+    face = arc.radius - arc.turn * side * half_width
+    outward = 1.0 if face > arc.radius else -1.0
+    step_max = 2.0 * math.acos(max(-1.0, 1.0 - tolerance / face))
+    count = max(1, math.ceil(arc.sweep / step_max - 1e-9))
+    step = arc.sweep / count
+    centres, halves, yaws = [], [], []
+    for i in range(count):
+        mid = arc.start_angle + arc.turn * (i + 0.5) * step
+        r = face * math.cos(step / 2) + outward * RAIL_THICKNESS / 2
+        centres.append((cx + r * math.cos(mid), cy + r * math.sin(mid), arc.start.z + height / 2))
+        halves.append((face * math.sin(step / 2), RAIL_THICKNESS / 2, height / 2))
+        yaws.append(mid + math.pi / 2)
+    return centres, halves, yaws

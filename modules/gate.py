@@ -1,0 +1,184 @@
+"""Gates: fixed bodies whose collision the plant switches on and off, as the paper's switches and separators do.
+
+| slot           | type | dir    | meaning                                                          |
+|----------------|------|--------|------------------------------------------------------------------|
+| gate.open      | void | target | open: let bottles pass                                           |
+| gate.close     | void | target | close: block the belt (waits until no bottle is in the way)      |
+| gate.closed    | bool | target | true closes, false opens (a level instead of two events)         |
+| gate.is_closed | bool | source | the gate is closed and blocks, every step                        |
+| gate.is_open   | bool | source | the gate is open, every step (both false while it moves)         |
+| gate.on_closed | void | source | the gate reached closed                                          |
+| gate.on_opened | void | source | the gate reached open                                            |
+| gate.blocked   | bool | source | a close waits for a bottle to clear the gate, every step         |
+
+Timing, in physics ticks at communication points: opening turns the collision off at once (the
+gate leaves the path) and reports `on_opened` after `travel_time`; closing turns it on after
+`travel_time`, and only once no bottle comes within MARGIN of the gate's boxes, because
+switching on a body inside a bottle tips it or pushes it the wrong way. Measured at 0.5 m/s,
+150 Hz: a 5 mm gate enabled 0–20 mm into a bottle tipped it by 3–4°, 30 mm in pushed it
+through to the far side; the switch blade enabled 2–21 mm into a bottle tipped it by
+2.0–3.7°, 32 mm in by 12°. Bullet pushes out gently (no bottle ran faster than 1.1× the
+belt), so the wait is about tipping and wrong sides, not launching. A command to the state the
+gate is in or heading for changes nothing; the opposite command while moving turns it round
+from that moment. Reached states are reported from the communication point after they are
+reached, like every source that reports the world.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from hub.component import Component
+from hub.physics.frames import Boxes
+from hub.slots import Slot
+
+# A bottle must keep this far from a gate's boxes for it to close. Only overlap at the moment
+# of switching is harmful: a bottle that runs into the gate in the next tick is stopped by the
+# contact like at any closed gate.
+MARGIN = 0.001
+
+
+def overlap(boxes: Boxes, positions: np.ndarray, radii: np.ndarray, half_heights: np.ndarray) -> float:
+    """How deep the deepest upright cylinder reaches into any of the boxes, m (≤ 0: none touches).
+
+    In each box's frame: r minus the horizontal distance from the axis to the box, or, with the
+    axis inside the box, r plus the distance to the nearest side face."""
+    if len(positions) == 0:
+        return -math.inf
+    local = boxes.local(positions)
+    e = boxes.half_extents[:, None, :]
+    outside = np.maximum(np.abs(local[..., :2]) - e[..., :2], 0.0)
+    inside = np.min(e[..., :2] - np.abs(local[..., :2]), axis=-1)
+    depth = np.where(inside > 0, radii[None, :] + inside, radii[None, :] - np.hypot(outside[..., 0], outside[..., 1]))
+    level = np.abs(local[..., 2]) <= e[..., 2] + half_heights[None, :]
+    depth = np.where(level, depth, -math.inf)
+    return float(depth.max())
+
+
+class Blocker:
+    """The physics of one gate: its boxes, whether they collide, and the test whether a bottle is
+    in the way. `push` is how deep a bottle may reach into the boxes and still be pushed out
+    when they turn solid (0: the way must be clear by MARGIN)."""
+
+    def __init__(self, world, centers, half_extents, yaws, solid: bool, travel_ticks: int, push: float = 0.0):
+        self.world = world
+        self.part = world.add_switchable_boxes(centers, half_extents, yaws, solid)
+        self.boxes = Boxes()
+        for c, h, y in zip(centers, half_extents, yaws):
+            self.boxes.add(c, h, y)
+        self.allowed = push - MARGIN
+        self.travel = travel_ticks
+        self.target = solid          # the commanded state
+        self.solid = solid           # the collision now
+        self.arrive: int | None = None   # tick the move ends, None when not moving
+        self.waiting = False             # a due close waits for the way to clear
+        self.interlock: Blocker | None = None   # a gate that must be closed before this one opens
+        self.held_open = False           # an open waits for the interlock
+        self.reached: bool | None = None  # state reached at the last actuation, reported next sense
+
+    def in_the_way(self) -> bool:
+        w = self.world
+        return overlap(self.boxes, w.positions, w.radii, w.half_heights) > self.allowed
+
+    @property
+    def closed(self) -> bool:
+        return self.solid and self.arrive is None
+
+    def command(self, tick: int, solid: bool) -> None:
+        if not solid and self.interlock is not None and not self.interlock.closed:
+            self.held_open = self.target   # open once the interlock is closed (if not open already)
+            return
+        self.held_open = False
+        if solid == self.target:
+            return
+        self.target = solid
+        self.arrive = tick + self.travel
+        self.waiting = False
+        if not solid and self.solid:
+            self.solid = False
+            self.world.set_solid(self.part, False)
+
+    def actuate(self, tick: int) -> None:
+        """Finish a move that is due: an opening is reported, a closing happens if the way is clear."""
+        if self.held_open and self.interlock.closed:
+            self.command(tick, False)
+        if self.arrive is None or tick < self.arrive:
+            return
+        self.waiting = self.target and self.in_the_way()
+        if self.waiting:
+            return   # try again at the next point
+        if self.target:
+            self.solid = True
+            self.world.set_solid(self.part, True)
+        self.arrive = None
+        self.reached = self.target
+
+
+class TwoPositions(Component):
+    """A component for one Blocker; subclasses name the slots (NAMES: role → slot name)."""
+
+    NAMES: dict[str, str] = {}
+
+    def __init__(self, obj, name, blocker: Blocker):
+        super().__init__(obj, name)
+        self.blocker = blocker
+
+    def sense(self, tick):
+        b, n = self.blocker, self.NAMES
+        if b.reached is not None:
+            self.emit(n["reached_solid"] if b.reached else n["reached_passable"])
+            b.reached = None
+        settled = b.arrive is None
+        self.emit(n["is_solid"], settled and b.solid)
+        self.emit(n["is_passable"], settled and not b.target)
+        self.emit(n["blocked"], b.waiting)
+
+    def actuate(self):
+        b, n, tick = self.blocker, self.NAMES, self.blocker.world.tick
+        if self.updated(n["level"]):
+            b.command(tick, self.value(n["level"]))
+        if self.updated(n["to_passable"]):
+            b.command(tick, False)
+        if self.updated(n["to_solid"]):
+            b.command(tick, True)
+        b.actuate(tick)
+
+
+class Gate(TwoPositions):
+    SLOTS = (
+        Slot.target("open", "void", "open: let bottles pass"),
+        Slot.target("close", "void", "close: block the belt (waits until no bottle is in the way)"),
+        Slot.target("closed", "bool", "true closes, false opens"),
+        Slot.source("is_closed", "bool", "closed and blocking"),
+        Slot.source("is_open", "bool", "open (false while moving)"),
+        Slot.source("on_closed", "void", "reached closed"),
+        Slot.source("on_opened", "void", "reached open"),
+        Slot.source("blocked", "bool", "a close waits for a bottle to clear the gate"),
+    )
+    NAMES = {"to_passable": "open", "to_solid": "close", "level": "closed", "is_solid": "is_closed",
+             "is_passable": "is_open", "reached_solid": "on_closed", "reached_passable": "on_opened",
+             "blocked": "blocked"}
+
+
+GATE_PARAMETERS = {
+    "width": {"type": "number", "exclusiveMinimum": 0, "default": 0.1,
+              "description": "clear width of the belt the gate closes, m"},
+    "height": {"type": "number", "exclusiveMinimum": 0, "default": 0.08,
+               "description": "gate height above the surface, m (above a bottle's centre of mass, so it does not tip it)"},
+    "thickness": {"type": "number", "exclusiveMinimum": 0, "default": 0.005, "description": "gate thickness along the belt, m"},
+    "travel_time": {"type": "number", "minimum": 0, "default": 0.1, "description": "time to open or close, s"},
+}
+
+
+def gate_across(world, point, yaw: float, params: dict, closed: bool, push: float = 0.0) -> Blocker:
+    """A gate from rail to rail standing across a belt at `point` (on its centre line, at its surface)."""
+    x, y, z = point
+    half = (params["thickness"] / 2, params["width"] / 2, params["height"] / 2)
+    return Blocker(world, [(x, y, z + half[2])], [half], [yaw], closed, round(params["travel_time"] * world.rate), push)
+
+
+def along(point, yaw_degrees: float, distance: float):
+    """The point `distance` metres from `point` along a heading."""
+    yaw = math.radians(yaw_degrees)
+    return point[0] + distance * math.cos(yaw), point[1] + distance * math.sin(yaw), point[2]

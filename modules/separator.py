@@ -1,0 +1,89 @@
+"""Separator: two gates a bottle's length apart, closed alternately, let one bottle through per cycle (the paper's Fig. 9).
+
+| slot         | type | dir    | meaning                                                            |
+|--------------|------|--------|--------------------------------------------------------------------|
+| bp.open      | void | target | open the downstream gate (the one closed in base position)         |
+| bp.close     | void | target | close it (waits until no bottle is in the way)                     |
+| bp.closed    | bool | target | true closes, false opens                                           |
+| bp.is_closed | bool | source | closed and blocking, every step                                    |
+| bp.is_open   | bool | source | open, every step (both false while it moves)                       |
+| bp.on_closed | void | source | reached closed                                                     |
+| bp.on_opened | void | source | reached open                                                       |
+| bp.blocked   | bool | source | a close waits for a bottle to clear the gate, every step           |
+| wp.…         |      |        | the same slots for the upstream gate (closed in working position)  |
+
+Base position: BP closed, WP open — the queue runs up to BP. Working position: WP closes
+between the first and the second bottle, then BP opens and lets that one bottle go. Back to
+base: BP closes, WP opens, the next bottle moves up. Which gate moves when is the separator's
+state logic (a Petri net in an FMU, driven by the sensors around it); here flows drive the
+gates directly. See modules/gate.py for the timing of one gate.
+
+WP stands where the second bottle of a queue held by BP begins, so closing it always meets
+that bottle's front: a gate could never wait for a gap in a queue of touching bottles. So WP,
+unlike every other gate, may close onto a bottle reaching up to `push` into it, and the
+engine pushes that bottle (and the queue behind it) back by that much. Measured with a 5 mm
+gate at 0.5 m/s: switching on at up to 10 mm of overlap moves the bottle at under the belt
+speed and tilts it by under 4°; at 30 mm (its axis at the gate) it is pushed through.
+The bottles must come in single file (a lane a little wider than a bottle).
+
+The gates are interlocked, as a separator's mechanics keeps them: a gate opens only while the
+other is closed, so at least one always holds the queue. A logic that moves both at once (the
+separator Petri net sets BasePos and WorkingPos in one step) thus gets WP closed before BP
+opens and BP closed before WP opens, and never lets two bottles through.
+"""
+from __future__ import annotations
+
+import math
+
+from hub.module import Module
+
+from .gate import GATE_PARAMETERS, Gate, along, gate_across
+from .params import POSITION, YAW
+
+
+def pitch(params) -> float:
+    """Distance between the gates' centres: the first bottle of the queue fits between them."""
+    return params["thickness"] + params["bottle_diameter"]
+
+
+class Separator(Module):
+    """BP stands at `position` (on the belt's centre line, at its surface), WP one bottle upstream of it."""
+
+    PARAMETERS = {
+        "type": "object",
+        "properties": {
+            "position": {**POSITION, "description": "foot of the downstream gate BP on the belt's centre line, m"},
+            "yaw": {**YAW, "description": "heading of the belt there, degrees"},
+            "bottle_diameter": {"type": "number", "exclusiveMinimum": 0, "default": 0.06,
+                                "description": "diameter of the bottles it separates, m: sets the gates' pitch"},
+            **GATE_PARAMETERS,
+            "push": {"type": "number", "minimum": 0, "default": 0.015,
+                     "description": "how deep the second bottle may reach into WP when it closes, m (it is pushed back)"},
+            "working": {"type": "boolean", "default": False,
+                        "description": "start in working position (WP closed, BP open) instead of base position"},
+        },
+        "required": ["position"],
+        "additionalProperties": False,
+    }
+    COMPONENTS = {"bp": Gate, "wp": Gate}
+
+    @classmethod
+    def check(cls, params):
+        if params["push"] < params["thickness"]:
+            return [(("push",), f"{params['push']:g} m is less than WP's thickness ({params['thickness']:g} m): "
+                                "the second bottle of a queue reaches that far into WP, so it could never close")]
+        if params["push"] >= params["bottle_diameter"] / 2:
+            return [(("push",), f"{params['push']:g} m reaches the axis of a bottle of diameter "
+                                f"{params['bottle_diameter']:g} m: WP would push it through, not back "
+                                f"(keep it below {params['bottle_diameter'] / 2:g} m)")]
+        return []
+
+    @classmethod
+    def build(cls, name, params, world):
+        yaw = math.radians(params["yaw"])
+        working = params["working"]
+        bp = gate_across(world, params["position"], yaw, params, not working)
+        wp_at = along(params["position"], params["yaw"], -pitch(params))
+        wp = gate_across(world, wp_at, yaw, params, working, params["push"])
+        bp.interlock, wp.interlock = wp, bp
+        return {"bp": Gate(name, "bp", bp), "wp": Gate(name, "wp", wp)}

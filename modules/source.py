@@ -1,0 +1,169 @@
+"""Source (storage): puts bottles with ids and destinations out at one spot, on command or at a rate.
+
+| slot              | type   | dir    | meaning                                                        |
+|-------------------|--------|--------|----------------------------------------------------------------|
+| store.release     | void   | target | put the next bottle out (it waits while the spot is occupied)  |
+| store.released    | void   | source | a bottle was put out                                           |
+| store.object      | string | source | id of the bottle put out; active with released                 |
+| store.destination | string | source | its destination; active with released                          |
+| store.remaining   | int    | source | bottles still in store, every step                             |
+| store.waiting     | bool   | source | a release waits for the spot to clear, every step              |
+
+The bottles are either listed (`bottles`: ids and destinations) or made by a rule (`count`
+bottles, ids `prefix` + number, destinations drawn with `weights` from the scenario's
+run.seed and the object's name, so every run draws the same and two sources draw apart).
+
+Every body is created when the plant is built, never in the loop (pybullet is deterministic
+only for an identical sequence of calls, and collision shapes are never freed). Bottles not
+yet out are parked off stage (hub/physics/world.py `park`): asleep, without collision and not
+read per tick, so a full store costs next to nothing. A release puts the next bottle, upright
+and at rest, on the spot — once nothing stands within a bottle's width of it, so it is never
+put into another bottle. One release is pending at most: commands while one waits are merged.
+With `interval`, the source also releases by itself every `interval` seconds from `start`.
+"""
+from __future__ import annotations
+
+import zlib
+
+import numpy as np
+
+from hub.component import Component
+from hub.errors import SimulationError
+from hub.module import Module
+from hub.slots import Slot
+
+from .manifest import register
+from .params import POSITION, length
+
+
+class Store(Component):
+    SLOTS = (
+        Slot.target("release", "void", "put the next bottle out"),
+        Slot.source("released", "void", "a bottle was put out"),
+        Slot.source("object", "string", "id of the bottle put out"),
+        Slot.source("destination", "string", "its destination"),
+        Slot.source("remaining", "int", "bottles still in store"),
+        Slot.source("waiting", "bool", "a release waits for the spot to clear"),
+    )
+
+    def __init__(self, obj, name, world, spot, bodies, destinations, clear, every, first):
+        super().__init__(obj, name)
+        self.world = world
+        self.spot = spot
+        self.bodies = bodies              # in release order
+        self.destinations = destinations
+        self.clear = clear                # minimum horizontal distance of any axis from the spot
+        self.every, self.due = every, first   # automatic releases, in ticks (None: on command only)
+        self.next = 0
+        self.pending = False
+        self.out: int | None = None       # index released at the last actuation, reported next sense
+
+    def sense(self, tick):
+        if self.out is not None:
+            self.emit("released")
+            self.emit("object", self.world.labels[self.bodies[self.out]])
+            self.emit("destination", self.destinations[self.out])
+            self.out = None
+        self.emit("remaining", len(self.bodies) - self.next)
+        self.emit("waiting", self.pending and self.next < len(self.bodies))
+
+    def actuate(self):
+        tick = self.world.tick
+        if self.updated("release"):
+            self.pending = True
+        if self.due is not None and tick >= self.due:
+            self.pending = True
+            self.due += self.every
+        if self.pending and self.next < len(self.bodies) and self.spot_clear():
+            self.world.unpark(self.bodies[self.next], self.spot)
+            self.out, self.next, self.pending = self.next, self.next + 1, False
+
+    def spot_clear(self) -> bool:
+        w = self.world
+        d = w.positions[:, :2] - np.asarray(self.spot[:2])
+        near = np.einsum("ij,ij->i", d, d) < self.clear ** 2
+        # Only bodies at the spot's level count: a bottle carried high above it is no obstacle.
+        level = np.abs(w.positions[:, 2] - (self.spot[2] + w.half_heights)) < 2 * w.half_heights
+        return not np.any(near & level)
+
+
+class Source(Module):
+    """Bottles appear standing on `position`; listed in `bottles`, or `count` of them by a seeded rule."""
+
+    PARAMETERS = {
+        "type": "object",
+        "properties": {
+            "position": {**POSITION, "description": "centre of a released bottle's base (on a belt or the store's platform), m"},
+            "bottles": {"type": "array", "minItems": 1, "description": "the bottles in release order",
+                        "items": {"type": "object", "required": ["id"], "additionalProperties": False,
+                                  "properties": {"id": {"type": "string", "minLength": 1},
+                                                 "destination": {"type": "string", "default": ""}}}},
+            "count": {"type": "integer", "minimum": 1, "description": "instead of `bottles`: how many to make"},
+            "prefix": {"type": "string", "description": "ids of made bottles: prefix + number (default: the object's name)"},
+            "weights": {"type": "object", "additionalProperties": {"type": "number", "minimum": 0},
+                        "description": "destination → relative frequency, for made bottles"},
+            "interval": {"type": "number", "exclusiveMinimum": 0, "description": "release by itself every this many s"},
+            "start": {"type": "number", "minimum": 0, "default": 0.0, "description": "first release by itself, s"},
+            "platform": {"type": "boolean", "default": False,
+                         "description": "build a fixed storage platform under the spot (for a robot to pick from)"},
+            "radius": length(0.03, "bottle radius, m"),
+            "height": length(0.1, "bottle height, m"),
+            "mass": length(0.05, "bottle mass, kg"),
+        },
+        "required": ["position"],
+        "additionalProperties": False,
+    }
+    COMPONENTS = {"store": Store}
+
+    @classmethod
+    def check(cls, params):
+        problems = []
+        if ("bottles" in params) == ("count" in params):
+            problems.append(((), "give either `bottles` (a list of ids and destinations) or `count` (made by a rule)"))
+        for key in ("prefix", "weights"):
+            if key in params and "bottles" in params:
+                problems.append(((key,), f"`{key}` makes bottles by the rule: it goes with `count`, not `bottles`"))
+        if "weights" in params and not any(w > 0 for w in params["weights"].values()):
+            problems.append((("weights",), "at least one destination needs a weight above 0"))
+        ids = [b["id"] for b in params.get("bottles", [])]
+        duplicates = sorted({i for i in ids if ids.count(i) > 1})
+        if duplicates:
+            problems.append((("bottles",), f"duplicate ids: {', '.join(duplicates)}"))
+        return problems
+
+    @classmethod
+    def bottles(cls, name: str, params: dict, seed: int) -> list[tuple[str, str]]:
+        """(id, destination) of every bottle, in release order."""
+        if "bottles" in params:
+            return [(b["id"], b.get("destination", "")) for b in params["bottles"]]
+        count, prefix = params["count"], params.get("prefix", name)
+        width = len(str(count))
+        weights = params.get("weights")
+        if not weights:
+            return [(f"{prefix}{i + 1:0{width}d}", "") for i in range(count)]
+        names = sorted(weights)   # the draw must not depend on the order of the YAML mapping
+        p = np.array([weights[n] for n in names], float)
+        rng = np.random.default_rng([seed, zlib.crc32(name.encode())])
+        drawn = rng.choice(len(names), size=count, p=p / p.sum())
+        return [(f"{prefix}{i + 1:0{width}d}", names[k]) for i, k in enumerate(drawn.tolist())]
+
+    @classmethod
+    def build(cls, name, params, world):
+        spot = tuple(float(v) for v in params["position"])
+        r, h = params["radius"], params["height"]
+        if params["platform"]:
+            world.add_static_box((spot[0], spot[1], spot[2] - 0.01), (2 * r, 2 * r, 0.01))
+        bodies, destinations = [], []
+        for ident, destination in cls.bottles(name, params, world.seed):
+            if ident in world.labels:
+                raise SimulationError(f"object {name!r}: bottle id {ident!r} is already used by another bottle")
+            body = world.add_bottle(spot, r, h, params["mass"], ident)
+            world.park(body)
+            register(world, body, destination)
+            bodies.append(body)
+            destinations.append(destination)
+        every = first = None
+        if "interval" in params:
+            every = max(1, round(params["interval"] * world.rate))
+            first = round(params["start"] * world.rate)
+        return {"store": Store(name, "store", world, spot, bodies, destinations, 2 * r, every, first)}

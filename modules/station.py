@@ -1,0 +1,104 @@
+"""Station (filling, capping): changes the state of a bottle that stands still in it for a set time.
+
+| slot              | type   | dir    | meaning                                                        |
+|-------------------|--------|--------|----------------------------------------------------------------|
+| process.started   | void   | source | a bottle came to rest in the station: processing began         |
+| process.done      | void   | source | processing finished: the bottle is filled (or capped)          |
+| process.aborted   | void   | source | the bottle left before it was done; its state is unchanged     |
+| process.object    | string | source | id of the bottle processed; active with started, done, aborted |
+| process.busy      | bool   | source | a bottle is being processed, every step                        |
+
+The station does not hold the bottle: a `stopper` in front of it does, and the plant's logic
+opens it on `done` (see scenarios/station.yaml). A bottle counts as standing while its
+horizontal speed is below `still`; it must stand for `time` seconds (counted in ticks at
+communication points) to be done. A bottle is processed once: it must leave the volume
+before the station takes it again. The bottle's state lives in the plant's manifest
+(modules/manifest.py), where ID readers and sinks read it.
+"""
+from __future__ import annotations
+
+import math
+
+from hub.component import Component
+from hub.module import Module
+from hub.slots import Slot
+
+from .manifest import cargo
+from .trigger import add_volume, volume_parameters
+
+OPERATIONS = {"fill": "filled", "cap": "capped"}
+
+
+class Process(Component):
+    SLOTS = (
+        Slot.source("started", "void", "a bottle came to rest: processing began"),
+        Slot.source("done", "void", "processing finished"),
+        Slot.source("aborted", "void", "the bottle left before it was done"),
+        Slot.source("object", "string", "id of the bottle processed"),
+        Slot.source("busy", "bool", "a bottle is being processed"),
+    )
+
+    def __init__(self, obj, name, world, trigger, field: str, ticks: int, still: float):
+        super().__init__(obj, name)
+        self.world = world
+        self.trigger = trigger
+        self.field = field
+        self.ticks = ticks
+        self.still = still
+        self.body: int | None = None      # the bottle being processed
+        self.since = 0
+        self.finished: set[int] = set()   # processed and still inside
+
+    def sense(self, tick):
+        world = self.world
+        inside = self.world.take_trigger(self.trigger).inside
+        self.finished &= set(inside)
+        if self.body is not None and self.body not in inside:
+            self.emit("aborted")
+            self.emit("object", world.labels[self.body])
+            self.body = None
+        if self.body is None:
+            for n in inside:
+                vx, vy, _ = world.velocities[n]
+                if n not in self.finished and math.hypot(vx, vy) < self.still:
+                    self.body, self.since = n, tick
+                    self.emit("started")
+                    self.emit("object", world.labels[n])
+                    break
+        elif tick - self.since >= self.ticks:
+            setattr(cargo(world, self.body), self.field, True)
+            self.finished.add(self.body)
+            self.emit("done")
+            self.emit("object", world.labels[self.body])
+            self.body = None
+        self.emit("busy", self.body is not None)
+
+    def events(self, tick):
+        for slot in ("started", "done", "aborted"):
+            if self.signals.active[self.index[slot]]:
+                yield tick, slot, self.value("object")
+
+
+class Station(Module):
+    """A filling or capping station: a box volume centred at `position`; `size` along, across and up."""
+
+    PARAMETERS = {
+        "type": "object",
+        "properties": {
+            **volume_parameters([0.04, 0.1, 0.1], "station's working volume"),
+            "operation": {"enum": sorted(OPERATIONS), "description": "fill: the bottle gets filled; cap: it gets capped"},
+            "time": {"type": "number", "minimum": 0, "default": 1.0, "description": "how long a bottle must stand, s"},
+            "still": {"type": "number", "exclusiveMinimum": 0, "default": 0.02,
+                      "description": "a bottle slower than this stands, m/s"},
+        },
+        "required": ["position", "operation"],
+        "additionalProperties": False,
+    }
+    COMPONENTS = {"process": Process}
+
+    @classmethod
+    def build(cls, name, params, world):
+        trigger = add_volume(world, params)
+        ticks = round(params["time"] * world.rate)
+        return {"process": Process(name, "process", world, trigger, OPERATIONS[params["operation"]],
+                                   ticks, params["still"])}

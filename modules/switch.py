@@ -1,0 +1,144 @@
+"""Track switch: a T-junction of a straight main belt and a branch belt, with a blade that diverts bottles into the branch.
+
+| slot              | type | dir    | meaning                                                         |
+|-------------------|------|--------|-----------------------------------------------------------------|
+| blade.to_base     | void | target | move to base position: bottles run straight on                 |
+| blade.to_working  | void | target | move to working position: bottles turn into the branch          |
+| blade.working     | bool | target | true moves to working, false to base (a level instead of events)|
+| blade.in_base     | bool | source | the blade is in base position, every step                       |
+| blade.in_working  | bool | source | the blade is in working position and guides, every step         |
+| blade.on_base     | void | source | reached base position                                           |
+| blade.on_working  | void | source | reached working position                                        |
+| blade.blocked     | bool | source | a move to working waits for a bottle to clear the blade         |
+| main.speed …      |      |        | the main belt's drive: speed, run, running, velocity (see conveyor) |
+| branch.speed …    |      |        | the branch belt's drive, the same slots                         |
+
+The blade is the paper's arcuate rigid body of box shapes (Fig. 7): the outer guard rail of a
+quarter circle from the main belt's centre line into the branch's, starting tangent to the
+main belt's far rail and ending tangent to the branch's downstream rail, its faces a polygon
+inscribed in that arc (modules/belt.py `arc_rail`). Base and working position are its
+collision switched off and on, as in the paper; the move takes `travel_time`, and the blade
+turns solid only when no bottle overlaps it (see modules/gate.py for why and how it waits).
+Which position to take for which bottle is the switch's state logic (the paper's Fig. 8, an
+FMU later); here flows drive the blade.
+
+The switch builds both belts because the main belt's near rail needs an opening where the
+branch leaves: its floor, like every belt's, merges with the floors it touches
+(hub/physics/supports.py), so conveyors chained to its main line (`after: NAME`) or to its
+branch (`after: NAME_branch`) hand bottles over without a seam.
+"""
+from __future__ import annotations
+
+import math
+
+from hub.module import Module
+from hub.physics.frames import Arc, Pose, Straight
+from hub.slots import Slot
+
+from .belt import (COMMON, K_DEFAULT, PLACEMENT, RAIL_THICKNESS, SUPPORT_THICKNESS, BeltDrive, arc_rail,
+                   build_segment, check_placement, start_pose)
+from .gate import Blocker, TwoPositions
+from .params import length
+
+SIDES = {"left": 1, "right": -1}
+
+
+class Blade(TwoPositions):
+    SLOTS = (
+        Slot.target("to_base", "void", "move to base position"),
+        Slot.target("to_working", "void", "move to working position"),
+        Slot.target("working", "bool", "true: working position, false: base position"),
+        Slot.source("in_base", "bool", "in base position"),
+        Slot.source("in_working", "bool", "in working position, guiding"),
+        Slot.source("on_base", "void", "reached base position"),
+        Slot.source("on_working", "void", "reached working position"),
+        Slot.source("blocked", "bool", "a move to working waits for a bottle to clear the blade"),
+    )
+    NAMES = {"to_passable": "to_base", "to_solid": "to_working", "level": "working", "is_solid": "in_working",
+             "is_passable": "in_base", "reached_solid": "on_working", "reached_passable": "on_base",
+             "blocked": "blocked"}
+
+
+class Switch(Module):
+    """A main belt from `position` along `yaw` with a branch leaving to one `side` at `branch_at`."""
+
+    PARAMETERS = {
+        "type": "object",
+        "properties": {
+            **PLACEMENT,
+            "length": length(description="main belt length, m"),
+            "branch_at": length(description="distance along the main belt to the branch's centre line, m"),
+            "branch_length": length(description="branch belt length from the main belt's rail, m"),
+            "side": {"enum": sorted(SIDES), "default": "right", "description": "side the branch leaves to"},
+            **COMMON,
+            "branch_speed": {"type": "number", "description": "branch belt speed, m/s (default: `speed`)"},
+            "blade_height": length(0.06, "blade height above the surface, m (above a bottle's centre of mass)"),
+            "blade_tolerance": length(0.002, "how far the blade's flat faces may stray from the arc, m"),
+            "travel_time": {"type": "number", "minimum": 0, "default": 0.2,
+                            "description": "time the blade takes to move, s"},
+            "working": {"type": "boolean", "default": False, "description": "start in working position"},
+        },
+        "required": ["length", "branch_at", "branch_length"],
+        "additionalProperties": False,
+    }
+    COMPONENTS = {"blade": Blade, "main": BeltDrive, "branch": BeltDrive}
+
+    @classmethod
+    def slots(cls, params):
+        return {"blade": Blade.SLOTS, "main": BeltDrive.SLOTS, "branch": BeltDrive.SLOTS}
+
+    @classmethod
+    def check(cls, params):
+        problems = check_placement(params)
+        half, a, total = params["width"] / 2, params["branch_at"], params["length"]
+        turn = half + RAIL_THICKNESS   # the blade's quarter circle starts this far before the branch
+        if a - turn < 0:
+            problems.append((("branch_at",), f"{a:g} m leaves no room for the blade before the branch: "
+                                             f"it needs at least {turn:g} m of main belt"))
+        if a + half + RAIL_THICKNESS > total:
+            problems.append((("branch_at",), f"{a:g} m puts the branch's opening past the main belt's end "
+                                             f"(length {total:g} m): at most {total - half - RAIL_THICKNESS:g} m"))
+        return problems
+
+    @classmethod
+    def build(cls, name, params, world):
+        start = start_pose(name, params, world)
+        main = Straight(start, params["length"])
+        s, half, a = SIDES[params["side"]], params["width"] / 2, params["branch_at"]
+        fork = main.pose_at(a)
+        lx, ly = fork.left
+        branch_start = Pose(fork.x + s * lx * (half + RAIL_THICKNESS), fork.y + s * ly * (half + RAIL_THICKNESS),
+                            fork.z, fork.yaw + s * math.pi / 2)
+        branch_params = {**params, "speed": params.get("branch_speed", params["speed"])}
+        branch = build_segment(name, branch_params, world, Straight(branch_start, params["branch_length"]))["drive"]
+        world.anchors[f"{name}_branch"] = world.anchors[name]
+        drive = cls.build_main(name, params, world, main, s, a)
+        world.anchors[name] = main.end
+        # The blade: outer rail of a quarter circle of radius half + rail from the main centre
+        # line into the branch's, so its ends meet the far rail and the downstream branch rail.
+        turn = half + RAIL_THICKNESS
+        arc = Arc(main.pose_at(a - turn), turn, math.pi / 2, s)
+        centres, halves, yaws = arc_rail(arc, -s, half, params["blade_height"], params["blade_tolerance"])
+        blocker = Blocker(world, centres, halves, yaws, params["working"], round(params["travel_time"] * world.rate))
+        return {"blade": Blade(name, "blade", blocker), "main": drive,
+                "branch": BeltDrive(name, "branch", world, branch.field, branch.speed, branch.running)}
+
+    @staticmethod
+    def build_main(name, params, world, line: Straight, s: int, a: float) -> BeltDrive:
+        """Floor, field and rails of the main belt, its rail on the branch side open over the branch's width."""
+        z, half, height = line.start.z, params["width"] / 2, params["rail_height"]
+        world.add_support(z, line.footprint(half + RAIL_THICKNESS), SUPPORT_THICKNESS)
+        lx, ly = line.start.left
+        for side, pieces in ((-s, [(0.0, line.length)]), (s, [(0.0, a - half), (a + half, line.length)])):
+            offset = side * (half + RAIL_THICKNESS / 2)
+            for u0, u1 in pieces:
+                if u1 - u0 <= 1e-9:
+                    continue
+                mid = line.pose_at((u0 + u1) / 2)
+                world.add_static_box((mid.x + lx * offset, mid.y + ly * offset, z + height / 2),
+                                     ((u1 - u0) / 2, RAIL_THICKNESS / 2, height / 2), line.start.yaw)
+        rate, per_mass = (params["gain"], False) if "gain" in params else (params.get("k", K_DEFAULT), True)
+        speed, running = params["speed"], params["running"]
+        field = world.add_belt_field(line, half, z - SUPPORT_THICKNESS, z + params["field_height"], rate,
+                                     speed if running else 0.0, params["grip"], per_mass)
+        return BeltDrive(name, "main", world, field, speed, running)

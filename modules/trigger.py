@@ -1,0 +1,75 @@
+"""The volume trigger component shared by every sensing module: a box latched over the physics substeps.
+
+| slot             | type   | dir    | meaning                                                       |
+|------------------|--------|--------|---------------------------------------------------------------|
+| trigger.on_enter | void   | source | an object entered the volume in this step                     |
+| trigger.on_stay  | void   | source | an object was inside at some tick of this step                |
+| trigger.on_leave | void   | source | an object left the volume in this step                        |
+| trigger.object   | string | source | id of the object that entered last; active with on_enter      |
+| trigger.occupied | bool   | source | whether an object is inside now, every step                   |
+
+Enter and leave events go to the event log with the exact physics tick and the object's id;
+an object that enters and leaves between two communication points gives both events.
+"""
+from __future__ import annotations
+
+import math
+
+from hub.component import Component
+from hub.slots import Slot
+
+from .params import POSITION, YAW
+
+
+def volume_parameters(size: list[float], what: str) -> dict:
+    """Schema properties of a box volume: its centre, yaw and size along, across and up."""
+    return {
+        "position": {**POSITION, "description": f"centre of the {what}, m"},
+        "yaw": YAW,
+        "size": {"type": "array", "items": {"type": "number", "exclusiveMinimum": 0},
+                 "minItems": 3, "maxItems": 3, "default": size,
+                 "description": "extent along, across and up, m"},
+    }
+
+
+def add_volume(world, params) -> int:
+    """The world trigger of a box volume given by `volume_parameters`."""
+    half = [s / 2 for s in params["size"]]
+    return world.add_trigger(params["position"], half, math.radians(params["yaw"]))
+
+
+class VolumeTrigger(Component):
+    """The paper's volume trigger; `latch` keeps what the world saw since the last point."""
+
+    SLOTS = (
+        Slot.source("on_enter", "void", "an object entered"),
+        Slot.source("on_stay", "void", "an object was inside"),
+        Slot.source("on_leave", "void", "an object left"),
+        Slot.source("object", "string", "id of the object that entered last"),
+        Slot.source("occupied", "bool", "an object is inside now"),
+    )
+
+    def __init__(self, obj, name, world, trigger):
+        super().__init__(obj, name)
+        self.world = world
+        self.trigger = trigger
+        self.latch = None
+
+    def sense(self, tick):
+        latch = self.latch = self.world.take_trigger(self.trigger)
+        labels = self.world.labels
+        if latch.entered:
+            self.emit("on_enter")
+            self.emit("object", labels[latch.entered[-1][1]])
+        if latch.stayed:
+            self.emit("on_stay")
+        if latch.left:
+            self.emit("on_leave")
+        self.emit("occupied", bool(latch.inside))
+
+    def events(self, tick):
+        labels = self.world.labels
+        for t, n in self.latch.entered:
+            yield t, "on_enter", labels[n]
+        for t, n in self.latch.left:
+            yield t, "on_leave", labels[n]
