@@ -8,6 +8,7 @@ from pathlib import Path
 
 import yaml
 
+from .cli_bus import add_commands as add_bus_commands, add_run_options, bus_settings
 from .errors import PlanthubError, Problem, ScenarioError
 from .master import Master
 from .plant import Plant
@@ -24,6 +25,7 @@ def main(argv=None) -> int:
     run.add_argument("scenario", type=Path)
     run.add_argument("--out", type=Path, help="folder for recording.csv and events.csv (default: runs/<name>)")
     _add_set(run)
+    add_run_options(run)
 
     check = sub.add_parser("validate", help="check a scenario without running it")
     check.add_argument("scenario", type=Path)
@@ -42,10 +44,12 @@ def main(argv=None) -> int:
     report.add_argument("--out", type=Path, help="folder for report.md, its plots and runs (default: runs/report_<name>)")
     report.add_argument("--no-plots", action="store_true", help="write the numbers only (no matplotlib needed)")
 
+    bus_commands = add_bus_commands(sub)
+
     args = parser.parse_args(argv)
     try:
         commands = {"run": _run, "validate": _validate, "describe": _describe, "check-fmu": _check_fmu,
-                    "report": _report}
+                    "report": _report, **bus_commands}
         return commands[args.command](args)
     except ScenarioError as exc:
         print(f"planthub: {exc}", file=sys.stderr)
@@ -101,17 +105,46 @@ def _validate(args) -> int:
 
 
 def _run(args) -> int:
+    from .bus import Bus
+    from .commands import Commands, load_commands
+    from .pacing import Pacer
+
     scenario = _load(args)
-    out = args.out or Path("runs") / scenario.name
-    columns = []
-    with Plant(scenario) as plant:
-        columns = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
-        recorder = Recorder(columns, scenario.run.physics_rate, out)
-        try:
-            result = Master(plant, recorder).run(progress=_Progress() if sys.stderr.isatty() else None)
-        finally:
-            recorder.close()
+    out = args.out or Path("runs") / (scenario.name + ("_replay" if args.replay else ""))
+    if args.replay and out.resolve() == args.replay.resolve():
+        raise PlanthubError(f"--out {out} is the run being replayed; write the replay elsewhere")
+    if args.realtime is not None and not args.realtime > 0:
+        raise PlanthubError(f"--realtime needs a positive factor, got {args.realtime:g}")
+    settings = bus_settings(args, scenario)
+    bus = Bus(settings) if settings is not None else None
+    notice = lambda text: print(f"planthub: {text}", file=sys.stderr)
+    try:
+        with Plant(scenario) as plant:
+            columns = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
+            replay = load_commands(args.replay, plant) if args.replay else None
+            recorder = Recorder(columns, scenario.run.physics_rate, out)
+            commands = Commands(plant, recorder, replay) if replay is not None else None
+            pacer = Pacer(scenario.run.physics_rate, args.realtime) if args.realtime else None
+            master = Master(plant, recorder, bus=bus, commands=commands, pacer=pacer, log=notice)
+            try:
+                result = master.run(progress=_Progress() if sys.stderr.isatty() else None)
+            finally:
+                master.close()
+                recorder.close()
+    finally:
+        if bus is not None:
+            bus.close()
     _summary(scenario, result, recorder, out)
+    if result.stopped_by:
+        print(f"  stopped      {result.stopped_by}")
+    if pacer is not None:
+        print(f"  pacing       {pacer.summary()}")
+    if master.dataplane is not None:
+        count = len(master.lockstep.peers)
+        print(f"  bus          {count} participant{'s' if count != 1 else ''}, "
+              f"{master.dataplane.samples} data-plane samples")
+    if (out / "commands.csv").is_file():
+        print(f"  commands     {out / 'commands.csv'}")
     return 0
 
 

@@ -15,6 +15,7 @@ class RunResult:
     ticks: int
     rate: int
     wall_seconds: float
+    stopped_by: str = ""    # why the run ended before the scenario's end (an operator's stop)
 
     @property
     def sim_seconds(self) -> float:
@@ -38,12 +39,31 @@ class Master:
     components (FMUs) step over the same interval from t with the inputs flows gave them at t
     (Jacobi: their outputs appear at the next point).
     Time is the physics tick count; seconds are only derived for output.
+
+    With a bus (given, or opened from `run.bus` when logic is served by participants): before
+    the first point the participants are launched and awaited (`hub.lockstep`); operator
+    commands are applied at a point, sources after 1 and targets after 2 (`hub.commands`); and
+    after 4 the slots subscribers watch are published (`hub.dataplane`). A `pacer` holds each
+    point until its wall-clock time. A Master that ran to the scenario's end, was stopped or
+    failed has closed its bus side; one stopped earlier with `until_tick` is closed by `close`.
     """
 
-    def __init__(self, plant: Plant, recorder: Recorder | None = None):
+    def __init__(self, plant: Plant, recorder: Recorder | None = None, *, bus=None, commands=None,
+                 pacer=None, log=None):
+        from .lockstep import RemoteSlave
+
         self.plant = plant
         self.world = plant.world
         self.recorder = recorder or Recorder([], plant.scenario.run.physics_rate)
+        self.bus = bus
+        self.commands = commands          # hub.commands.Commands (a replay), or None: live from the bus
+        self.pacer = pacer
+        self.log = log or (lambda text: None)
+        self.lockstep = self.dataplane = None
+        self._remote = [c.slave for c in plant.components if isinstance(getattr(c, "slave", None), RemoteSlave)]
+        self._own_bus = False
+        self._started = self._closed = False
+        self.stopped_by = ""
         comps = plant.components
         # Only components that do something in a hook are called: a scene of 100 bottles should
         # not pay 200 empty calls per communication step.
@@ -64,9 +84,15 @@ class Master:
         signals.begin_step()
         for comp in self._sensing:
             comp.sense(tick)
+        commands = self.commands
+        events = []
+        if commands is not None:
+            events = commands.take(tick)
+            commands.apply(signals, Direction.SOURCE)
         for evaluate in self.plant.plan:
             evaluate()
-        events = []
+        if commands is not None:
+            commands.apply(signals, Direction.TARGET)
         for comp in self._emitters:
             prefix = f"{comp.obj}.{comp.name}."
             events.extend((t, prefix + slot, detail) for t, slot, detail in comp.events(tick))
@@ -76,6 +102,10 @@ class Master:
         for comp in self._actuating:
             comp.actuate()
         self.recorder.sample(tick, signals)
+        if self.dataplane is not None:
+            self.dataplane.publish(tick, signals)
+        if self.lockstep is not None:
+            self.lockstep.poll()
         self._communicated = True
 
     def advance(self, until_tick: int | None = None) -> None:
@@ -99,18 +129,92 @@ class Master:
         for comp in self._stepping:
             comp.step(start, ticks)
 
+    def start(self) -> None:
+        """Join the bus, launch and await the participants (once, before the first point)."""
+        if self._started:
+            return
+        self._started = True
+        from .commands import Commands
+
+        scenario = self.plant.scenario
+        settings = scenario.run.bus
+        if self.bus is None and self._remote:
+            from .bus import Bus
+            from .scenario import BusSettings
+
+            self.bus, self._own_bus = Bus(settings or BusSettings()), True
+        if self.bus is None:
+            return
+        from .dataplane import DataPlane
+        from .lockstep import Lockstep
+        from .wire import check_run_name
+
+        from .bus import local_endpoint
+
+        settings = self.bus.settings
+        run = check_run_name(scenario.name)
+        where = ", ".join(local_endpoint(e) for e in self.bus.endpoints) or ", ".join(settings.connect)
+        self.log(f"run {run!r} on the bus ({settings.mode}, {where}): plant/{run}/**")
+        self.lockstep = Lockstep(self.bus, run, self._remote, lease=settings.lease, on_loss=settings.on_loss,
+                                 rate=self.world.rate, log=self._notice)
+        self.lockstep.start(self.world.tick)
+        self.dataplane = DataPlane(self.bus, run, self.plant, settings)
+        if self.commands is None:
+            self.commands = Commands(self.plant, self.recorder)
+            self.commands.listen(self.bus, run)
+
+    def _notice(self, text: str) -> None:
+        self.recorder.event(self.world.tick, "@bus", text)
+        self.log(text)
+
     def run(self, until_tick: int | None = None, progress=None) -> RunResult:
         """Communicate at every point from now to `until_tick` (default: the scenario's end)."""
         end = self.plant.scenario.run.end_tick if until_tick is None else until_tick
         start_tick, started = self.world.tick, time.perf_counter()
-        if not self._communicated:
-            self.communicate()
-        while self.world.tick < end:
-            self.advance(end)
-            self.communicate()
-            if progress is not None:
-                progress(self.world.tick, end)
-        return RunResult(self.world.tick - start_tick, self.world.rate, time.perf_counter() - started)
+        try:
+            self.start()
+            if not self._communicated:
+                self.communicate()
+            pacer = self.pacer
+            if pacer is not None:
+                pacer.start(self.world.tick)
+            while self.world.tick < end and not self._stop_requested():
+                self.advance(end)
+                self.communicate()
+                if pacer is not None:
+                    pacer.wait(self.world.tick)
+                if progress is not None:
+                    progress(self.world.tick, end)
+        except BaseException:
+            self.close("the run failed")
+            raise
+        if self._stop_requested():
+            self.stopped_by = f"stopped by an operator at t = {self.world.tick / self.world.rate:.9g} s"
+        if self.stopped_by or self.world.tick >= self.plant.scenario.run.end_tick:
+            self.close(self.stopped_by or "the run reached its end")
+        return RunResult(self.world.tick - start_tick, self.world.rate, time.perf_counter() - started,
+                         self.stopped_by)
+
+    def _stop_requested(self) -> bool:
+        return self.commands is not None and self.commands.stop_requested
+
+    def close(self, reason: str = "closed") -> None:
+        """Tell participants the run is over, stop the processes it launched, close a bus it opened."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            if self.lockstep is not None:
+                self.lockstep.close(reason)
+        finally:
+            if self._own_bus:
+                self.bus.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
 
 
 def _may_emit(comp: Component) -> bool:

@@ -5,6 +5,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from .component import Component
+from .logic import LogicSpec
 from .slots import Slot
 
 
@@ -22,11 +23,14 @@ class Module:
 
     - `PARAMETERS`: a JSON Schema (an object schema) of its scenario parameters, with defaults;
     - `COMPONENTS`: component name → component class, whose `SLOTS` make the module's slot table;
-    - `build(name, params, world)`: the components of one instance, with its physics created.
+    - `build(name, params, world)`: the components of one instance, with its physics created;
+    - optionally `LOGIC`: its default state logic FMU and how it is wired to its components.
     """
 
     PARAMETERS: ClassVar[dict] = {"type": "object", "properties": {}}
     COMPONENTS: ClassVar[dict[str, type[Component]]] = {}
+    #: The actuator's state logic (an FMU) that a scenario attaches with `logic:`; None: it has none.
+    LOGIC: ClassVar[LogicSpec | None] = None
 
     @classmethod
     def slots(cls, params: dict) -> dict[str, tuple[Slot, ...]]:

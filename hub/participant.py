@@ -100,10 +100,9 @@ class Participant:
         return out
 
 
-def options(argv=None, description: str = "") -> argparse.Namespace:
+def add_options(parser: argparse.ArgumentParser) -> None:
     """Where to join: command-line options, defaulting to what a launching hub put in the environment."""
     env = os.environ.get
-    parser = argparse.ArgumentParser(description=description or "a planthub participant")
     parser.add_argument("--run", default=env("PLANTHUB_RUN"), help="the run's name (the scenario's name)")
     parser.add_argument("--name", default=env("PLANTHUB_NAME"), help="the logic object this participant serves")
     parser.add_argument("--connect", action="append", metavar="ENDPOINT",
@@ -113,18 +112,25 @@ def options(argv=None, description: str = "") -> argparse.Namespace:
                         help="s after which the hub declares this process frozen")
     parser.add_argument("--join-timeout", type=float, default=float(env("PLANTHUB_JOIN_TIMEOUT", "30")),
                         help="s to wait for the hub (and for it to come back after a lost connection)")
-    args, _ = parser.parse_known_args(argv)
+
+
+def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> argparse.Namespace:
     if not args.connect:
-        args.connect = [e for e in env("PLANTHUB_CONNECT", "").split(",") if e]
+        args.connect = [e for e in os.environ.get("PLANTHUB_CONNECT", "").split(",") if e]
     missing = [o for o in ("run", "name") if not getattr(args, o)]
     if missing:
         parser.error(f"give {' and '.join('--' + o for o in missing)} (or start me from a scenario)")
     return args
 
 
-def serve(logic: Participant, argv=None) -> int:
-    """Serve `logic` until the run stops; the exit status: 0 when the run ended, 1 on an error."""
-    args = options(argv, (type(logic).__doc__ or "").strip().splitlines()[0] if type(logic).__doc__ else "")
+def serve(logic: Participant, argv=None, args: argparse.Namespace | None = None) -> int:
+    """Serve `logic` until the run stops (options from `argv`, default the command line, or parsed
+    `args`); the exit status: 0 when the run ended, 1 on an error."""
+    if args is None:
+        doc = (type(logic).__doc__ or "a planthub participant").strip().splitlines()[0]
+        parser = argparse.ArgumentParser(description=doc)
+        add_options(parser)
+        args = check_options(parser, parser.parse_args(argv))
     try:
         with _Link(logic, args) as link:
             return link.serve()

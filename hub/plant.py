@@ -22,6 +22,8 @@ class Plant:
             self.components: list[Component] = []
             for spec in scenario.objects:
                 components = spec.module.build(spec.name, spec.params, self.world)
+                if spec.logic is not None:
+                    components["logic"] = spec.logic_module.build(spec.name, spec.logic, self.world)["logic"]
                 self.objects[spec.name] = DynamicObject(spec.name, spec.module_name, components)
                 self.components.extend(components.values())
             slots, self.index, local_indices = [], {}, []

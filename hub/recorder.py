@@ -38,6 +38,8 @@ class Recorder:
     slots take one column per component, `slot.x` …); a void source shows 1 in steps where it
     fired, a void target 1 in steps where a flow fed it; bool slots 1/0; reals are written with every digit, so equal runs give equal files.
     events.csv: `time,tick,slot,detail`, one row per event in order of the physics tick.
+    commands.csv (from the first operator command on): `time,tick,op,slot,value,by`, the value
+    as JSON — what `planthub run --replay` applies again at the same ticks.
     """
 
     columns: list[tuple[SlotRef, SlotType, int]]   # (slot, type, index in the plant's Signals)
@@ -47,7 +49,7 @@ class Recorder:
 
     def __post_init__(self):
         self._files = []
-        self._rows = self._events = None
+        self._rows = self._events = self._commands = None
         if self.directory is not None:
             self.directory.mkdir(parents=True, exist_ok=True)
             self._rows = self._open("recording.csv")
@@ -79,6 +81,14 @@ class Recorder:
         stats.count += 1
         if self._events is not None:
             self._events.writerow([repr(tick / self.rate), tick, slot, detail])
+
+    def command(self, tick: int, op: str, slot: str, value: str, by: str) -> None:
+        if self.directory is None:
+            return
+        if self._commands is None:
+            self._commands = self._open("commands.csv")
+            self._commands.writerow(["time", "tick", "op", "slot", "value", "by"])
+        self._commands.writerow([repr(tick / self.rate), tick, op, slot, value, by])
 
     def close(self) -> None:
         for handle in self._files:

@@ -12,6 +12,8 @@ import jsonschema
 from . import flowgraph
 from .errors import Problem, ScenarioError
 from .flow import Condition, Mode
+from .logic import SCHEMA as LOGIC_SCHEMA
+from .logic import fmu_parameters
 from .module import Module
 from .registry import Registry, UnknownModule, default_registry, did_you_mean
 from .slots import Direction, Slot, SlotRef, SlotType
@@ -67,6 +69,8 @@ class ObjectSpec:
     module: type[Module]
     module_name: str
     params: dict             # with defaults filled in
+    logic: dict | None = None   # `fmu` module parameters of the attached state logic
+    logic_module: type[Module] | None = None   # the module that builds it (`fmu`)
 
 
 @dataclass(frozen=True)
@@ -193,7 +197,8 @@ class _Checker:
         data = self.data
         run = self.run = self.run_settings(_dict(data.get("run")))
         objects, slot_tables = self.objects(_dict(data.get("objects")))
-        flows = self.flows(_list(data.get("flows")), slot_tables)
+        # The logic's own wiring comes first, so a scenario's flows into the same slot win.
+        flows = self.wiring(objects, slot_tables) + self.flows(_list(data.get("flows")), slot_tables)
         record = self.record(_list(data.get("record")), slot_tables)
         order = self.order(flows, objects)
         if self.problems:
@@ -235,12 +240,15 @@ class _Checker:
             except UnknownModule as exc:
                 self.problem(at + ("module",), str(exc))
                 continue
-            params = {k: v for k, v in spec.items() if k != "module"}
+            params = {k: v for k, v in spec.items() if k not in ("module", "logic")}
             before = len(self.problems)
             self.validate(params, module.PARAMETERS, at)
             if len(self.problems) > before:
                 continue
             params = _resolve_paths(module.with_defaults(params), module.PARAMETERS, self.path.parent)
+            logic = self.logic(at, module, spec["module"], spec.get("logic"), params)
+            if logic is None and spec.get("logic") is not None:
+                continue
             found = module.check(params) or module.check_run(params, self.run)
             for where, message in found:
                 self.problem(at + where, message)
@@ -252,10 +260,36 @@ class _Checker:
                 ids.setdefault(params["id"], name)
             if self.references(at, params, module.PARAMETERS, {o.name: o.module_name for o in objects}):
                 continue
-            objects.append(ObjectSpec(name, module, spec["module"], params))
-            tables[name] = {(comp, s.name): s for comp, slots in module.slots(params).items() for s in slots}
+            logic_module = self.registry.get("fmu") if logic is not None else None
+            objects.append(ObjectSpec(name, module, spec["module"], params, logic, logic_module))
+            slots = dict(module.slots(params))
+            if logic is not None:
+                slots.update(logic_module.slots(logic))
+            tables[name] = {(comp, s.name): s for comp, group in slots.items() for s in group}
         self.broken = set(specs) - set(tables)   # objects already reported: their slots are not judged
         return objects, tables
+
+    def logic(self, at: tuple, module: type[Module], module_name: str, value, params: dict) -> dict | None:
+        """The `fmu` parameters of the state logic attached with `logic:`, or None (problems noted)."""
+        if value is None:
+            return None
+        if module.LOGIC is None:
+            self.problem(at + ("logic",), f"module {module_name!r} has no state logic to attach")
+            return None
+        before = len(self.problems)
+        self.validate(value, LOGIC_SCHEMA, at + ("logic",))
+        if len(self.problems) > before:
+            return None
+        if value == "default" and not module.LOGIC.default_file.is_file():
+            self.problem(at + ("logic",), f"the default logic of {module_name!r}, {module.LOGIC.default_file}, "
+                                          f"is not built: run `make fmus`")
+            return None
+        fmu = self.registry.get("fmu")
+        logic = fmu.with_defaults(fmu_parameters(module.LOGIC, value, self.path.parent, params))
+        found = fmu.check(logic) or fmu.check_run(logic, self.run)
+        for where, message in found:
+            self.problem(at + ("logic",) + where, message)
+        return None if found else logic
 
     def references(self, at: tuple, params: dict, schema: dict, before: dict[str, str]) -> bool:
         """Parameters marked `"x-object": [modules]` name an object of one of those modules declared
@@ -307,6 +341,24 @@ class _Checker:
 
     def module_of(self, obj: str) -> str:
         return self.data["objects"][obj]["module"]
+
+    def wiring(self, objects: list[ObjectSpec], tables: dict) -> list[FlowSpec]:
+        """The flows inside objects whose state logic is attached (LogicSpec.wiring)."""
+        out = []
+        for spec in objects:
+            if spec.logic is None:
+                continue
+            at = ("objects", spec.name, "logic")
+            for source, target in spec.module.LOGIC.wiring:
+                src = self.resolve(f"{spec.name}.{source}", at, tables, Direction.SOURCE)
+                tgt = self.resolve(f"{spec.name}.{target}", at, tables, Direction.TARGET)
+                if src and tgt and src[1].type is not tgt[1].type:
+                    self.problem(at, f"the logic's wiring does not fit: {src[0]} is {src[1].type.value} "
+                                     f"but {tgt[0]} is {tgt[1].type.value}")
+                elif src and tgt:
+                    out.append(FlowSpec(src[0], tgt[0], src[1].type, Condition.SOURCE, Mode.CONTINUOUS,
+                                        None, line_of(self.lines, at)))
+        return out
 
     def flows(self, specs: list, tables: dict) -> list[FlowSpec]:
         out = []

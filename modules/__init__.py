@@ -10,6 +10,7 @@ CATALOGUE = {
     "fmu": "modules.fmu:Fmu",
     "id_reader": "modules.id_reader:IdReader",
     "light_barrier": "modules.light_barrier:LightBarrier",
+    "participant": "modules.participant:ParticipantModule",
     "robot_arm": "modules.robot_arm:RobotArm",
     "separator": "modules.separator:Separator",
     "sink": "modules.sink:Sink",

@@ -19,6 +19,7 @@ import math
 
 from hub.component import Component
 from hub.errors import Problem, ScenarioError
+from hub.logic import LogicSpec
 from hub.physics.frames import Arc, Pose, Straight
 from hub.registry import did_you_mean
 from hub.slots import Slot
@@ -28,6 +29,17 @@ from .params import POSITION, length
 RAIL_THICKNESS = 0.01
 SUPPORT_THICKNESS = 0.02
 K_DEFAULT = 16.0
+
+
+# The belt's state logic (fmus/nets/belt_run_stop.pnml): `logic.Run_put` and `logic.Stop_put`
+# are the run and stop commands; the net's Running place drives the belt. It starts in the
+# state the belt's `running` parameter gives.
+LOGIC = LogicSpec(
+    model="belt_run_stop",
+    events=("Run_put", "Stop_put", "Running_got", "Stopped_got"),
+    wiring=(("logic.Running_marked", "drive.run"),),
+    parameters=lambda params: {"Running_initial": int(params["running"]), "Stopped_initial": int(not params["running"])},
+)
 
 
 class BeltDrive(Component):

@@ -15,6 +15,7 @@ from __future__ import annotations
 from hub.module import Module
 from hub.physics.frames import Straight
 
+from .belt import LOGIC as BELT_LOGIC
 from .belt import COMMON, PLACEMENT, BeltDrive, build_segment, check_placement, start_pose
 from .params import length
 
@@ -39,6 +40,7 @@ class Conveyor(Module):
         "additionalProperties": False,
     }
     COMPONENTS = {"drive": BeltDrive}
+    LOGIC = BELT_LOGIC
 
     @classmethod
     def check(cls, params):

@@ -21,6 +21,7 @@ import math
 from hub.module import Module
 from hub.physics.frames import Arc
 
+from .belt import LOGIC as BELT_LOGIC
 from .belt import COMMON, PLACEMENT, RAIL_THICKNESS, BeltDrive, build_segment, check_placement, start_pose
 from .params import length
 
@@ -43,6 +44,7 @@ class Curve(Module):
         "additionalProperties": False,
     }
     COMPONENTS = {"drive": BeltDrive}
+    LOGIC = BELT_LOGIC
 
     @classmethod
     def check(cls, params):

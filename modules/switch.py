@@ -23,9 +23,10 @@ Which position to take for which bottle is the switch's state logic (the paper's
 FMU later); here flows drive the blade.
 
 The switch builds both belts because the main belt's near rail needs an opening where the
-branch leaves: its floor, like every belt's, merges with the floors it touches
-(hub/physics/supports.py), so conveyors chained to its main line (`after: NAME`) or to its
-branch (`after: NAME_branch`) hand bottles over without a seam.
+branch leaves (a conveyor's rails are unbroken). Their floors, like every belt's, merge with
+the floors they touch (hub/physics/supports.py), so conveyors placed at the ends of its main
+belt or branch hand bottles over without a seam. (`after:` accepts only conveyors and curves
+for now; the main belt's end is registered as the switch's anchor for when it accepts more.)
 """
 from __future__ import annotations
 
@@ -111,7 +112,6 @@ class Switch(Module):
                             fork.z, fork.yaw + s * math.pi / 2)
         branch_params = {**params, "speed": params.get("branch_speed", params["speed"])}
         branch = build_segment(name, branch_params, world, Straight(branch_start, params["branch_length"]))["drive"]
-        world.anchors[f"{name}_branch"] = world.anchors[name]
         drive = cls.build_main(name, params, world, main, s, a)
         world.anchors[name] = main.end
         # The blade: outer rail of a quarter circle of radius half + rail from the main centre

@@ -1,0 +1,60 @@
+"""State logic attached to an actuator: the module's default FMU, or a replacement, and its wiring."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+BUILT_FMUS = Path(__file__).resolve().parent.parent / "build" / "fmus"
+
+
+@dataclass(frozen=True)
+class LogicSpec:
+    """What an actuator module declares about its state logic (its `LOGIC` attribute).
+
+    The FMU runs as the object's `logic` component; `wiring` are flows inside the object
+    ("logic.BasePos_got" → "blade.to_base"), added to the scenario's flows when a scenario
+    attaches the logic with `logic: default` or `logic: {file: …}`.
+    """
+
+    model: str                                   # built by `make fmus`: build/fmus/<model>-fmi2.fmu
+    events: tuple[str, ...] = ()                 # FMU Booleans used as events (void slots)
+    wiring: tuple[tuple[str, str], ...] = ()     # (source, target) within the object
+    #: FMU parameter defaults derived from the object's own parameters (e.g. the initial marking)
+    parameters: Callable[[dict], dict] = field(default=lambda params: {})
+
+    @property
+    def default_file(self) -> Path:
+        return BUILT_FMUS / f"{self.model}-fmi2.fmu"
+
+
+# `logic:` in a scenario object: the module's default FMU, or a replacement with fmu options.
+SCHEMA = {
+    "oneOf": [
+        {"const": "default"},
+        {
+            "type": "object",
+            "properties": {
+                "file": {"type": "string", "description": "a replacement FMU, relative to the scenario file"},
+                "parameters": {"type": "object"},
+                "map": {"type": "object", "additionalProperties": {"type": "string"}},
+                "isolate": {"type": "boolean"},
+                "step": {"type": "number", "exclusiveMinimum": 0},
+            },
+            "additionalProperties": False,
+        },
+    ]
+}
+
+
+def fmu_parameters(spec: LogicSpec, value, base: Path, params: dict) -> dict:
+    """The `fmu` module parameters for one attached logic (`value` is "default" or a mapping);
+    `params` are the actuator object's own parameters."""
+    options = {} if value == "default" else dict(value)
+    file = options.pop("file", None)
+    return {
+        "file": str((base / file).resolve()) if file else str(spec.default_file),
+        "parameters": {**spec.parameters(params), **options.pop("parameters", {})},
+        "events": list(spec.events),
+        **options,
+    }

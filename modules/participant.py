@@ -1,0 +1,81 @@
+"""Participant: logic served by another process over the Zenoh bus, stepped in lockstep.
+
+| slot           | type        | dir    | meaning                                          |
+|----------------|-------------|--------|--------------------------------------------------|
+| logic.<input>  | declared    | target | each entry of `inputs`, sent with every step     |
+| logic.<output> | declared    | source | each entry of `outputs`, from the step's answer  |
+
+The process (any language: schemas/wire.md; in Python: `hub.participant`) announces the same
+inputs and outputs and gets `parameters` when the hub welcomes it. With `command` the hub starts
+it (in `cwd`, default the scenario's folder; `python` means the hub's own interpreter) and stops it at the end;
+without, it waits `join_timeout` s for one started elsewhere (`--run`, `--name`, `--connect`).
+Like an FMU it steps from t to t + h with the inputs of t, and its outputs appear at t + h;
+`step` gives it its own, longer step. A void input is true in the steps a flow fed it; a void
+output true fires the event.
+"""
+from __future__ import annotations
+
+from hub.lockstep import RemoteSlave, RemoteSpec
+from hub.module import Module
+from hub.slots import Slot, SlotType
+from modules.fmu import FmuLogic
+
+_NAME = "^[A-Za-z_][A-Za-z0-9_]*$"
+_TYPES = [t.value for t in SlotType]
+
+
+class ParticipantModule(Module):
+    """Logic in a participant process on the bus: declared inputs and outputs, stepped in lockstep."""
+
+    PARAMETERS = {
+        "type": "object",
+        "properties": {
+            "inputs": {"type": "object", "propertyNames": {"pattern": _NAME}, "default": {},
+                       "additionalProperties": {"enum": _TYPES}, "description": "input name → slot type (target slots)"},
+            "outputs": {"type": "object", "propertyNames": {"pattern": _NAME}, "default": {},
+                        "additionalProperties": {"enum": _TYPES}, "description": "output name → slot type (source slots)"},
+            "parameters": {"type": "object", "default": {}, "description": "values sent to the participant when it joins"},
+            "command": {"type": "array", "items": {"type": "string"}, "minItems": 1,
+                        "description": "the hub starts this command (cwd: the scenario's folder); without: it joins by itself"},
+            "cwd": {"type": "string", "x-path": True, "default": ".",
+                    "description": "folder the command runs in, relative to the scenario file"},
+            "join_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
+                             "description": "s to wait for it to join (and to rejoin in a paused run)"},
+            "step": {"type": "number", "exclusiveMinimum": 0,
+                     "description": "its own communication step, s: a whole number of the scenario's"},
+        },
+        "additionalProperties": False,
+    }
+    COMPONENTS = {"logic": FmuLogic}
+
+    @classmethod
+    def check(cls, params):
+        both = sorted(set(params["inputs"]) & set(params["outputs"]))
+        return [(("outputs", name), f"{name!r} is also an input: slot names must differ") for name in both]
+
+    @classmethod
+    def check_run(cls, params, run):
+        if "step" in params:
+            every = params["step"] * run.physics_rate / run.substeps
+            if round(every) < 1 or abs(every - round(every)) > 1e-9 * every:
+                master = run.substeps / run.physics_rate
+                return [(("step",), f"{params['step']} s is not a whole number of communication steps "
+                                    f"({master:.6g} s)")]
+        return []
+
+    @classmethod
+    def slots(cls, params):
+        return {"logic": tuple(Slot.target(n, t) for n, t in params.get("inputs", {}).items())
+                + tuple(Slot.source(n, t) for n, t in params.get("outputs", {}).items())}
+
+    @classmethod
+    def build(cls, name, params, world):
+        inputs = tuple((n, SlotType(t)) for n, t in params["inputs"].items())
+        outputs = tuple((n, SlotType(t)) for n, t in params["outputs"].items())
+        command = tuple(params["command"]) if "command" in params else None
+        spec = RemoteSpec(name, inputs, outputs, dict(params["parameters"]), command, params["cwd"],
+                          float(params["join_timeout"]))
+        as_pairs = lambda pairs: [(n, k is SlotType.VOID) for n, k in pairs]
+        every = round(params["step"] * world.rate) if "step" in params else None
+        return {"logic": FmuLogic(name, "logic", cls.slots(params)["logic"], RemoteSlave(spec, world.rate),
+                                  as_pairs(inputs), as_pairs(outputs), world.rate, every)}
