@@ -28,22 +28,18 @@ class LogicSpec:
         return BUILT_FMUS / f"{self.model}-fmi2.fmu"
 
 
-# `logic:` in a scenario object: the module's default FMU, or a replacement with fmu options.
-SCHEMA = {
-    "oneOf": [
-        {"const": "default"},
-        {
-            "type": "object",
-            "properties": {
-                "file": {"type": "string", "description": "a replacement FMU, relative to the scenario file"},
-                "parameters": {"type": "object"},
-                "map": {"type": "object", "additionalProperties": {"type": "string"}},
-                "isolate": {"type": "boolean"},
-                "step": {"type": "number", "exclusiveMinimum": 0},
-            },
-            "additionalProperties": False,
-        },
-    ]
+# `logic:` in a scenario object is `default` (the module's own FMU) or these options, which
+# may name a replacement `file` and take the `fmu` module's other options.
+OPTIONS = {
+    "type": "object",
+    "properties": {
+        "file": {"type": "string", "description": "a replacement FMU, relative to the scenario file"},
+        "parameters": {"type": "object"},
+        "map": {"type": "object", "additionalProperties": {"type": "string"}},
+        "isolate": {"type": "boolean"},
+        "step": {"type": "number", "exclusiveMinimum": 0},
+    },
+    "additionalProperties": False,
 }
 
 

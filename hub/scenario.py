@@ -12,7 +12,7 @@ import jsonschema
 from . import flowgraph
 from .errors import Problem, ScenarioError
 from .flow import Condition, Mode
-from .logic import SCHEMA as LOGIC_SCHEMA
+from .logic import OPTIONS as LOGIC_OPTIONS
 from .logic import fmu_parameters
 from .module import Module
 from .registry import Registry, UnknownModule, default_registry, did_you_mean
@@ -276,8 +276,13 @@ class _Checker:
         if module.LOGIC is None:
             self.problem(at + ("logic",), f"module {module_name!r} has no state logic to attach")
             return None
+        if value != "default" and not isinstance(value, dict):
+            self.problem(at + ("logic",), f"expected `default` or a mapping of {', '.join(LOGIC_OPTIONS['properties'])}, "
+                                          f"got {value!r}")
+            return None
         before = len(self.problems)
-        self.validate(value, LOGIC_SCHEMA, at + ("logic",))
+        if isinstance(value, dict):
+            self.validate(value, LOGIC_OPTIONS, at + ("logic",))
         if len(self.problems) > before:
             return None
         if value == "default" and not module.LOGIC.default_file.is_file():

@@ -15,8 +15,9 @@
 Base position: BP closed, WP open — the queue runs up to BP. Working position: WP closes
 between the first and the second bottle, then BP opens and lets that one bottle go. Back to
 base: BP closes, WP opens, the next bottle moves up. Which gate moves when is the separator's
-state logic (a Petri net in an FMU, driven by the sensors around it); here flows drive the
-gates directly. See modules/gate.py for the timing of one gate.
+state logic: with `logic: default` the paper's net runs as the object's `logic` component,
+driven by the sensors around it (B326 at BP, B327 behind it, B321 downstream); without it,
+flows drive the gates directly. See modules/gate.py for the timing of one gate.
 
 WP stands where the second bottle of a queue held by BP begins, so closing it always meets
 that bottle's front: a gate could never wait for a gap in a queue of touching bottles. So WP,
@@ -44,6 +45,7 @@ from __future__ import annotations
 
 import math
 
+from hub.logic import LogicSpec
 from hub.module import Module
 
 from .gate import GATE_PARAMETERS, Gate, along, gate_across
@@ -75,6 +77,14 @@ class Separator(Module):
         "additionalProperties": False,
     }
     COMPONENTS = {"bp": Gate, "wp": Gate}
+    # The paper's Fig. 10 net (fmus/nets/separator.net.yaml): feed the sensors' on_stay to
+    # logic.B326_put, logic.B327_put and logic.B321_put; its BasePos and WorkingPos places
+    # close BP and WP.
+    LOGIC = LogicSpec(
+        model="separator",
+        events=("B326_put", "B327_put", "B321_put"),
+        wiring=(("logic.BasePos_marked", "bp.closed"), ("logic.WorkingPos_marked", "wp.closed")),
+    )
 
     @classmethod
     def check(cls, params):

@@ -19,8 +19,10 @@ main belt's far rail and ending tangent to the branch's downstream rail, its fac
 inscribed in that arc (modules/belt.py `arc_rail`). Base and working position are its
 collision switched off and on, as in the paper; the move takes `travel_time`, and the blade
 turns solid only when no bottle overlaps it (see modules/gate.py for why and how it waits).
-Which position to take for which bottle is the switch's state logic (the paper's Fig. 8, an
-FMU later); here flows drive the blade.
+Which position to take for which bottle is the switch's state logic: with `logic: default`
+the paper's Fig. 8 net runs as the object's `logic` component (commands on
+`logic.MoveToWorkingPos_put` / `logic.MoveToBasePos_put`, its WorkingPos place driving
+`blade.working`); without it, flows drive the blade directly.
 
 The switch builds both belts because the main belt's near rail needs an opening where the
 branch leaves (a conveyor's rails are unbroken). Their floors, like every belt's, merge with
@@ -32,6 +34,7 @@ from __future__ import annotations
 
 import math
 
+from hub.logic import LogicSpec
 from hub.module import Module
 from hub.physics.frames import Arc, Pose, Straight
 from hub.slots import Slot
@@ -83,6 +86,13 @@ class Switch(Module):
         "additionalProperties": False,
     }
     COMPONENTS = {"blade": Blade, "main": BeltDrive, "branch": BeltDrive}
+    # The paper's Fig. 8 net (fmus/nets/track_switch.pnml): commands on logic.MoveToWorkingPos_put
+    # and logic.MoveToBasePos_put; the marked WorkingPos place holds the blade in working position.
+    LOGIC = LogicSpec(
+        model="track_switch",
+        events=("MoveToBasePos_put", "MoveToWorkingPos_put", "BasePosStartAnim_got", "WorkingPosStartAnim_got"),
+        wiring=(("logic.WorkingPos_marked", "blade.working"),),
+    )
 
     @classmethod
     def slots(cls, params):

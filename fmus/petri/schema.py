@@ -8,7 +8,16 @@ import jsonschema
 
 from .problems import did_you_mean
 
-SCHEMA_PATH = Path(__file__).resolve().parents[2] / "schemas" / "net.schema.json"
+def _find_schema() -> Path:
+    """schemas/net.schema.json in the nearest folder above this package: the repository's top
+    level, or wherever the package was copied with it (e.g. into an FMU's resources)."""
+    for folder in Path(__file__).resolve().parents:
+        if (folder / "schemas" / "net.schema.json").is_file():
+            return folder / "schemas" / "net.schema.json"
+    raise FileNotFoundError("schemas/net.schema.json not found above " + str(Path(__file__).parent))
+
+
+SCHEMA_PATH = _find_schema()
 
 _TYPE_WORDS = {"integer": "an integer", "number": "a number", "string": "a string", "object": "a mapping",
                "array": "a list", "boolean": "true or false"}
