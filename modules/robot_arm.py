@@ -48,6 +48,7 @@ import numpy as np
 
 from hub.component import Component
 from hub.errors import SimulationError
+from hub.logic import LogicSpec
 from hub.module import Module
 from hub.physics.robot import JointMotion, reachable
 from hub.slots import Slot
@@ -225,6 +226,15 @@ class RobotArm(Module):
         "additionalProperties": False,
     }
     COMPONENTS = {"arm": Arm, "gripper": Gripper}
+    # The robot's sequence net (fmus/nets/robot_arm.net.yaml): each token put on
+    # logic.Request_put runs one pick → carry → place → return cycle, a phase per place; each
+    # phase that begins sends the arm its command (the arm queues a command while it moves).
+    LOGIC = LogicSpec(
+        model="robot_arm",
+        events=("Request_put", "Picking_got", "Carrying_got", "Placing_got", "Returning_got"),
+        wiring=(("logic.Picking_got", "arm.pick"), ("logic.Carrying_got", "arm.carry"),
+                ("logic.Placing_got", "arm.place"), ("logic.Returning_got", "arm.home")),
+    )
 
     @classmethod
     def tool_points(cls, params) -> dict[str, np.ndarray]:

@@ -154,3 +154,30 @@ def test_separator_logic_as_fmi3_gives_a_bit_identical_recording(fmus, tmp_path)
     run_scenario(SEPARATOR, tmp_path / "fmi3", {"run.duration": 3.0, "objects.sep.logic.file": str(fmus / "separator-fmi3.fmu")})
     for name in ("recording.csv", "events.csv"):
         assert (tmp_path / "fmi2" / name).read_bytes() == (tmp_path / "fmi3" / name).read_bytes()
+
+
+ROBOT = ROOT / "scenarios" / "robot_logic.yaml"
+
+
+def test_the_robot_net_sequences_the_arm_for_each_released_bottle(fmus, tmp_path):
+    """
+        store.released ─► robot.logic.Request_put ; Picking/Carrying/Placing/Returning_got ─► robot.arm.*
+    """
+    from .plant_watch import run_watched
+
+    _, _, watch = run_watched(ROBOT, tmp_path)
+    watch.assert_sound()
+    events = [(e["slot"], e["detail"]) for e in rows(tmp_path / "events.csv")]
+    grips = [d for s, d in events if s == "robot.gripper.on_grip"]
+    assert grips == ["S1", "S2"]
+    phases = [s.split(".")[-1] for s, _ in events if s.startswith("robot.logic.")]
+    assert phases == ["Picking_got", "Carrying_got", "Placing_got", "Returning_got"] * 2
+    last = rows(tmp_path / "recording.csv")[-1]
+    assert (last["sink.count.A"], last["sink.count.B"]) == ("1", "1")
+
+
+def test_robot_logic_as_fmi3_gives_a_bit_identical_recording(fmus, tmp_path):
+    run_scenario(ROBOT, tmp_path / "fmi2", {"run.duration": 6.0})
+    run_scenario(ROBOT, tmp_path / "fmi3", {"run.duration": 6.0, "objects.robot.logic": {"file": str(fmus / "robot_arm-fmi3.fmu")}})
+    for name in ("recording.csv", "events.csv"):
+        assert (tmp_path / "fmi2" / name).read_bytes() == (tmp_path / "fmi3" / name).read_bytes()
