@@ -102,6 +102,10 @@ class Commands:
                 raise CommandError(f"{name} is {kind.value}: {exc}") from None
         return Command(op, name, value, by)
 
+    def pending(self) -> bool:
+        """Whether live commands wait for the next point."""
+        return not self._inbox.empty()
+
     # --- at a communication point ----------------------------------------------------------
     def take(self, tick: int) -> list[tuple[int, str, str]]:
         """Apply the commands due at this point: record them and return their event-log rows."""

@@ -49,6 +49,11 @@ class Component:
         """Advance own logic over [tick, tick + ticks] with the inputs of this point; its new
         outputs are for the points that follow (sensed there, never earlier)."""
 
+    def emit_ready(self, tick: int) -> bool:
+        """Write now the outputs the last `step` computed for `tick` (Gauss-Seidel hands them on
+        before the next point); False if the component cannot."""
+        return False
+
     def close(self) -> None:
         """Release what the component holds (FMU instances, processes)."""
 

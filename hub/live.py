@@ -51,6 +51,7 @@ class Viewer:
         key = f"plant/{self.run}/{slots}"
         self.bus.subscribe(key, lambda m: self._samples.put(m))
         if period is not None:
+            self.wait_for_hub()   # a put before the hub's subscription is known here goes nowhere
             self.bus.put(wire.control_key(self.run, "viewer", self.id, "rate"),
                          wire.pack({"key": key, "period": period}), wire.MSGPACK)
 
@@ -72,17 +73,20 @@ class Viewer:
             if time.monotonic() >= deadline and not self.hub_alive:
                 raise PlanthubError(f"no hub for run {self.run!r} within {timeout:g} s")
 
-    def command(self, op: str, slot: str = "", value=None, *, by: str = "", wait: float | None = 5.0) -> dict | None:
-        """Send a command; with `wait`, return the hub's answer ({"ok", "tick", "error"}) or raise."""
+    def command(self, op: str, slot: str = "", value=None, *, by: str = "", wait: float | None = 5.0):
+        """Send a command. With `wait` (s), return the hub's answer, a map {id, ok, tick, error}, once the
+        command was applied or refused at a communication point; without, return its id (see `answer`)."""
         ident = uuid.uuid4().hex
+        self.wait_for_hub()
         self.bus.put(wire.control_key(self.run, "command"), command_message(op, slot, value, by, ident), wire.MSGPACK)
-        if wait is None:
-            return None
-        deadline = time.monotonic() + wait
+        return ident if wait is None else self.answer(ident, wait)
+
+    def answer(self, ident: str, timeout: float) -> dict:
+        deadline = time.monotonic() + timeout
         while ident not in self._results:
             item = self._control.get(deadline - time.monotonic())
             if item is None:
-                raise PlanthubError(f"no answer to {op} {slot} within {wait:g} s (is the run going?)")
+                raise PlanthubError(f"no answer to command {ident} within {timeout:g} s (is the run going?)")
             self._handle(item)
         return self._results.pop(ident)
 

@@ -88,6 +88,7 @@ class _Peer:
     result_n: int | None = None
     result: list | None = None
     pending: bytes | None = None       # the last step message, re-sent to a participant that rejoins
+    from_tick: int = 0                 # where its next (or re-sent) step starts
     sent_at: float = 0.0
     step_pub: object = None
     welcome_pub: object = None
@@ -192,7 +193,8 @@ class Lockstep:
         wired = [wire.to_wire(inputs[i][1], values[i]) for i in peer.in_order]
         peer.pending = wire.step_message(slave.sent, tick, ticks, t, h, wired)
         slave.sent += 1
-        self.tick = tick
+        peer.from_tick = tick
+        self.tick = tick + ticks   # the point at which the run now waits for the answers
         peer.sent_at = time.monotonic()
         peer.step_pub.put(peer.pending)
 
@@ -228,13 +230,31 @@ class Lockstep:
             message = item[1]
             peer = self.peers.get(message.key.rsplit("/", 1)[-1])
             if peer is not None and not message.alive and peer.welcomed and not self._closing:
-                self._lost(peer, self._gone(peer))
+                reason = self._gone(peer)
+                self._last_words(peer)
+                self._lost(peer, reason)
+
+    def _last_words(self, peer: _Peer) -> None:
+        """What a participant said just before it went (an error report) may trail its token's end
+        by a moment: take it in first, it names the cause."""
+        deadline, others = time.monotonic() + 0.05, []
+        try:
+            while (item := self.inbox.get(deadline - time.monotonic())) is not None:
+                if item[0] == "output" and item[1] == peer.name:
+                    self._dispatch(item)
+                else:
+                    others.append(item)
+        finally:
+            for item in others:
+                self.inbox.put(item)
 
     def _gone(self, peer: _Peer) -> str:
         if peer.process is not None:
             code = peer.process.poll(0.5)   # a killed process is gone before its token is
             if code is not None:
                 return f"left the bus: its process {peer.process.how_it_ended(code)}"
+            return ("stopped answering: its liveliness token expired while its process still runs "
+                    "(frozen, or its connection broke)")
         return ("left the bus: its liveliness token went away (its process ended, froze longer than "
                 "its lease, or lost its connection)")
 
@@ -305,9 +325,11 @@ class Lockstep:
 
     def _welcome(self, name: str, ident: str | None, error: str | None = None) -> None:
         if error is None:
+            peer = self.peers[name]
+            start = peer.from_tick if peer.result_n != peer.slave.sent - 1 else self.tick
             body = {"protocol": wire.PROTOCOL, "id": ident, "accepted": True, "run": self.run, "rate": self.rate,
-                    "tick": self.tick, "time": self.tick / self.rate, "lease": self.lease,
-                    "parameters": self.peers[name].slave.spec.parameters}
+                    "tick": start, "time": start / self.rate, "lease": self.lease,
+                    "parameters": peer.slave.spec.parameters}
         else:
             body = {"protocol": wire.PROTOCOL, "id": ident, "accepted": False, "error": error}
         publisher = self.peers[name].welcome_pub if name in self.peers else None

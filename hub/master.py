@@ -69,7 +69,6 @@ class Master:
         # not pay 200 empty calls per communication step.
         self._sensing = [c for c in comps if type(c).sense is not Component.sense]
         self._actuating = [c for c in comps if type(c).actuate is not Component.actuate]
-        self._stepping = [c for c in comps if type(c).step is not Component.step]
         self._emitters = [c for c in comps if _may_emit(c)]
         self._communicated = False
         self._answering = False   # the last step ended early on an event
@@ -126,8 +125,7 @@ class Master:
             end = min(end, until_tick)
         ticks = self.world.step(end - start, stop_on_event=run.event_driven)
         self._answering = start + ticks < end
-        for comp in self._stepping:
-            comp.step(start, ticks)
+        self.plant.step_logic(start, ticks)   # Jacobi or Gauss-Seidel (run.master)
 
     def start(self) -> None:
         """Join the bus, launch and await the participants (once, before the first point)."""
@@ -155,13 +153,15 @@ class Master:
         run = check_run_name(scenario.name)
         where = ", ".join(local_endpoint(e) for e in self.bus.endpoints) or ", ".join(settings.connect)
         self.log(f"run {run!r} on the bus ({settings.mode}, {where}): plant/{run}/**")
-        self.lockstep = Lockstep(self.bus, run, self._remote, lease=settings.lease, on_loss=settings.on_loss,
-                                 rate=self.world.rate, log=self._notice)
-        self.lockstep.start(self.world.tick)
+        # Everything that listens is declared before the hub's liveliness token, which tells others
+        # the hub is there: a put made before a subscription is known goes nowhere.
         self.dataplane = DataPlane(self.bus, run, self.plant, settings)
         if self.commands is None:
             self.commands = Commands(self.plant, self.recorder)
             self.commands.listen(self.bus, run)
+        self.lockstep = Lockstep(self.bus, run, self._remote, lease=settings.lease, on_loss=settings.on_loss,
+                                 rate=self.world.rate, log=self._notice)
+        self.lockstep.start(self.world.tick)
 
     def _notice(self, text: str) -> None:
         self.recorder.event(self.world.tick, "@bus", text)

@@ -53,6 +53,6 @@ class Pacer:
 
     def summary(self) -> str:
         if not self.overruns:
-            return f"paced at {self.factor:g}× real time, no overruns in {self.points} points"
+            return f"paced at {self.factor:g}× real time, no overruns in {self.points} point{'s' * (self.points != 1)}"
         return (f"paced at {self.factor:g}× real time, {self.overruns} of {self.points} points late "
                 f"(worst {1000 * self.worst:.1f} ms)")

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from .component import Component
 from .flow import Flow
+from .gauss_seidel import GaussSeidel
 from .module import DynamicObject
 from .physics import PhysicsWorld
 from .scenario import Scenario
@@ -45,14 +46,34 @@ class Plant:
                 for f in scenario.flows
             ]
             by_key = {f"{c.obj}.{c.name}": c for c in self.components}
+            self.logic = [c for c in self.components if type(c).step is not Component.step]
+            between = self._between_logic(by_key) if scenario.run.master == "gauss-seidel" else {}
             self.plan = [
                 (lambda flow=self.flows[ref]: flow.run(self.signals)) if kind == "flow" else by_key[ref].react
-                for kind, ref in scenario.order
+                for kind, ref in scenario.order if not (kind == "flow" and ref in between)
             ]
+            self.step_logic = (GaussSeidel(self.logic, list(between.values()), self.signals).step
+                               if between else self._jacobi)
             self.world.start()
         except BaseException:
             self.close()
             raise
+
+    def _between_logic(self, by_key) -> dict[int, tuple]:
+        """Flows from one logic component to another: flow index → (source comp, target comp, flow)."""
+        logic = {id(c) for c in self.logic}
+        out = {}
+        for i, spec in enumerate(self.scenario.flows):
+            a = by_key[f"{spec.source.obj}.{spec.source.component}"]
+            b = by_key[f"{spec.target.obj}.{spec.target.component}"]
+            if id(a) in logic and id(b) in logic:
+                out[i] = (a, b, self.flows[i])
+        return out
+
+    def _jacobi(self, start: int, ticks: int) -> None:
+        """Every logic component steps with the inputs of the point."""
+        for comp in self.logic:
+            comp.step(start, ticks)
 
     def close(self) -> None:
         try:

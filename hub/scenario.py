@@ -56,6 +56,7 @@ class RunSettings:
     end_tick: int            # a whole number of communication steps
     seed: int
     event_driven: bool = False   # a trigger event ends the communication step at its tick
+    master: str = "jacobi"       # or "gauss-seidel": how logic components step (hub/gauss_seidel.py)
     bus: BusSettings | None = None   # None: no `run.bus` section
 
     @property
@@ -226,8 +227,11 @@ class _Checker:
                 substeps = lo
         ticks = round(setting("duration", 10) * rate)
         end = max(1, math.ceil(ticks / substeps)) * substeps
-        return RunSettings(rate, substeps, end, setting("seed", 0, int), run.get("event_driven") is True,
-                           _bus_settings(run["bus"]) if isinstance(run.get("bus"), dict) else None)
+        return RunSettings(
+            rate, substeps, end, setting("seed", 0, int),
+            event_driven=run.get("event_driven") is True,
+            master=run.get("master") if run.get("master") in ("jacobi", "gauss-seidel") else "jacobi",
+            bus=_bus_settings(run["bus"]) if isinstance(run.get("bus"), dict) else None)
 
     def objects(self, specs: dict):
         objects, tables, ids = [], {}, {}

@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+from hub.commands import Commands, load_commands
 from hub.master import Master
 from hub.plant import Plant
 from hub.recorder import Recorder
@@ -20,12 +21,16 @@ BELT_PARTICIPANT = ROOT / "scenarios" / "belt_ramp_participant.yaml"
 
 
 @contextlib.contextmanager
-def hub(path, out: Path | None = None, overrides: dict | None = None, **master_options):
-    """A built plant and its Master, for runs in pieces (`master.run(until_tick=…)`); closed after."""
+def hub(path, out: Path | None = None, overrides: dict | None = None, replay: Path | None = None,
+        **master_options):
+    """A built plant and its Master, for runs in pieces (`master.run(until_tick=…)`); closed after.
+    With `replay`, the operator commands recorded in that run folder are applied again."""
     scenario = load_scenario(path, overrides)
     with Plant(scenario) as plant:
         columns = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
         recorder = Recorder(columns, scenario.run.physics_rate, out)
+        if replay is not None:
+            master_options["commands"] = Commands(plant, recorder, load_commands(replay, plant))
         master = Master(plant, recorder, **master_options)
         try:
             yield master

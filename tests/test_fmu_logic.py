@@ -330,3 +330,34 @@ def test_own_step_must_be_whole_master_steps(fmus, write_scenario):
         """)
     assert problems(path) == [f"{path}:4: objects.drive.step: 0.05 s is not a whole number of "
                               f"communication steps (0.02 s)"]
+
+
+@pytest.mark.parametrize("master, lag", [("jacobi", 1), ("gauss-seidel", 0)])
+def test_gauss_seidel_hands_fresh_outputs_down_the_flow(fmus, write_scenario, tmp_path, master, lag):
+    """
+        a (ramp 0.5 m/s²).speed ──► b.speed_setpoint ; b (ramp 0: follows at once).speed
+    Declared downstream first, so only the flow order can put `a` before `b`.
+    """
+    drive = fmus / "belt_drive-fmi2.fmu"
+    path = write_scenario(f"""
+        planthub: 1
+        run: {{duration: 1.0, physics_rate: 100, communication_step: 0.1, master: {master}}}
+        objects:
+          b: {{module: fmu, file: {drive}, parameters: {{ramp: 0.0}}}}
+          a: {{module: fmu, file: {drive}, parameters: {{ramp: 0.5}}}}
+          go: {{module: constant, type: bool, value: true}}
+          full: {{module: constant, type: real, value: 0.5}}
+        flows:
+          - {{from: go.value.out, to: a.logic.run, when: target}}
+          - {{from: go.value.out, to: b.logic.run, when: target}}
+          - {{from: full.value.out, to: a.logic.speed_setpoint, when: target}}
+          - {{from: a.logic.speed, to: b.logic.speed_setpoint}}
+        record: [a.logic.speed, b.logic.speed]
+        """)
+    run_scenario(path, tmp_path / "out")
+    data = rows(tmp_path / "out" / "recording.csv")
+    a = [float(r["a.logic.speed"]) for r in data]
+    b = [float(r["b.logic.speed"]) for r in data]
+    assert a[3] == pytest.approx(0.15)
+    for k in range(1 + lag, len(data)):
+        assert b[k] == a[k - lag], (master, k)

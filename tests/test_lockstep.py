@@ -1,0 +1,184 @@
+"""External participants in lockstep: the same logic in-process, as an FMU served over the bus and
+as a pure-Python participant gives the same recording, byte for byte; joining is checked and named."""
+import pytest
+
+from hub.bus import Bus
+from hub.errors import SimulationError
+from hub.scenario import BusSettings
+
+from .bus_support import BELT_FMU, BELT_PARTICIPANT, hub, output_of, process, same_files
+from .fmus.fmu_support import build
+from .helpers import ROOT, run_scenario
+
+BUILT = ROOT / "build" / "fmus"
+FMU = BUILT / "belt_drive-fmi2.fmu"
+
+
+@pytest.fixture(scope="module")
+def fmus():
+    return build(BUILT)
+
+
+@pytest.fixture(scope="module")
+def in_process(fmus, tmp_path_factory):
+    """belt_ramp_fmu.yaml with the FMU in the hub: the reference recording."""
+    out = tmp_path_factory.mktemp("in_process")
+    run_scenario(BELT_FMU, out)
+    return out
+
+
+def test_an_fmu_served_over_the_bus_gives_the_in_process_recording(in_process, tmp_path):
+    """
+        drive.logic ══ bus ══ planthub serve-fmu belt_drive-fmi2.fmu   (a process the hub launches)
+    """
+    run_scenario(BELT_FMU, tmp_path, {"objects.drive.participant": "launch"})
+    assert same_files(in_process, tmp_path)
+
+
+def test_a_python_participant_gives_the_in_process_recording(in_process, tmp_path):
+    """
+        drive.logic ══ bus ══ python -m modules.belt_drive_logic      (hub.participant)
+    """
+    run_scenario(BELT_PARTICIPANT, tmp_path)
+    assert same_files(in_process, tmp_path)
+    speeds = {line.split(",")[1] for line in (tmp_path / "recording.csv").read_text().splitlines()[1:]}
+    assert len(speeds) > 20   # the participant really stepped: the ramp passes many values
+
+
+def test_an_fmu_joining_from_another_process_gives_the_same_recording(in_process, tmp_path):
+    """The hub waits for `planthub serve-fmu … --connect ENDPOINT`, started by someone else."""
+    with Bus(BusSettings()) as bus, hub(BELT_FMU, tmp_path, {"objects.drive.participant": "join"}, bus=bus) as master:
+        with process("-m", "hub", "serve-fmu", FMU, "--run", "belt_ramp_fmu", "--name", "drive",
+                     "--connect", bus.endpoints[0]) as proc:
+            master.run()
+            assert output_of(proc)[0] == 0   # it ended by itself when the run stopped
+    assert same_files(in_process, tmp_path)
+
+
+def two_drives(write_scenario, command_a, command_b, lease=1.0):
+    """Two belts, each driven by its own participant process."""
+    objects = "\n".join(f"""
+          belt_{x}: {{module: conveyor, position: [0, {y}, 0], length: 2.5, speed: 0.0, k: 16}}
+          drive_{x}:
+            module: participant
+            inputs: {{run: bool, speed_setpoint: real}}
+            outputs: {{speed: real, running: bool}}
+            parameters: {{ramp: {ramp}{extra}}}
+            command: {command}
+            cwd: {ROOT}""" for x, y, ramp, command, extra in (("a", 0, 0.5, command_a, ", odd: true"),
+                                                                ("b", 1, 0.25, command_b, "")))
+    return write_scenario(f"""
+        planthub: 1
+        name: two_drives
+        run: {{duration: 1.0, physics_rate: 100, communication_step: 0.01, bus: {{lease: {lease}}}}}
+        objects:{objects}
+          go: {{module: constant, type: bool, value: true}}
+          setpoint: {{module: constant, type: real, value: 0.5}}
+        flows:
+          - {{from: go.value.out, to: drive_a.logic.run, when: target, mode: singular}}
+          - {{from: go.value.out, to: drive_b.logic.run, when: target, mode: singular}}
+          - {{from: setpoint.value.out, to: drive_a.logic.speed_setpoint, when: target, mode: singular}}
+          - {{from: setpoint.value.out, to: drive_b.logic.speed_setpoint, when: target, mode: singular}}
+          - {{from: drive_a.logic.speed, to: belt_a.drive.speed}}
+          - {{from: drive_b.logic.speed, to: belt_b.drive.speed}}
+        record: [drive_a.logic.speed, drive_b.logic.speed]
+        """)
+
+
+PLAIN = "[python, -m, tests.participants.belt_drives, plain]"
+SLOW = "[python, -m, tests.participants.belt_drives, slow]"
+
+
+def test_arrival_order_does_not_matter(write_scenario, tmp_path):
+    """
+        drive_a (slow on odd steps) ══ bus ══╗
+                                             hub: waits for both, files each answer under its sender
+        drive_b (slow on even steps) ═ bus ══╝
+    """
+    run_scenario(two_drives(write_scenario, PLAIN, PLAIN), tmp_path / "plain")
+    run_scenario(two_drives(write_scenario, SLOW, SLOW), tmp_path / "slow")
+    assert same_files(tmp_path / "plain", tmp_path / "slow")
+    last = (tmp_path / "slow" / "recording.csv").read_text().splitlines()[-1].split(",")
+    # After 1 s, the ramp of 0.5 m/s² reached 0.5 m/s, the ramp of 0.25 m/s² half of it.
+    assert float(last[1]) == 0.5 and float(last[2]) == pytest.approx(0.25)
+
+
+def test_a_participant_that_never_joins_is_named(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        name: lonely
+        run: {duration: 0.1, bus: {}}
+        objects:
+          drive: {module: participant, outputs: {speed: real}, join_timeout: 0.3}
+        """)
+    with pytest.raises(SimulationError) as info:
+        run_scenario(path)
+    message = str(info.value)
+    assert message.startswith("participant 'drive' did not join within 0.3 s: start it with the run name "
+                              "'lonely' and the hub's endpoint (tcp/127.0.0.1:")
+
+
+def test_a_command_that_fails_before_joining_shows_its_output(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        run: {duration: 0.1}
+        objects:
+          drive:
+            module: participant
+            outputs: {speed: real}
+            command: [python, -c, "import sys; print('no licence for this PLC'); sys.exit(3)"]
+        """)
+    with pytest.raises(SimulationError) as info:
+        run_scenario(path)
+    assert str(info.value) == ("participant 'drive': its process exited with code 3 before it could join\n"
+                               "  its output ends with:\n    no licence for this PLC")
+
+
+def test_a_missing_program_is_named(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        objects:
+          drive: {module: participant, outputs: {speed: real}, command: [no-such-plc-program, --fast]}
+        """)
+    with pytest.raises(SimulationError, match=r"^participant 'drive': cannot start 'no-such-plc-program --fast': "
+                                              r"No such file or directory$"):
+        run_scenario(path)
+
+
+def test_a_participant_that_does_not_fit_the_scenario_is_refused_with_every_difference(write_scenario):
+    path = write_scenario(f"""
+        planthub: 1
+        objects:
+          drive:
+            module: participant
+            inputs: {{run: bool, speed_setpoint: int}}
+            outputs: {{speed: real, runing: bool}}
+            command: [python, -m, modules.belt_drive_logic]
+            cwd: {ROOT}
+        """)
+    with pytest.raises(SimulationError) as info:
+        run_scenario(path)
+    assert str(info.value) == (
+        "participant 'drive' does not fit the scenario: its input 'speed_setpoint' is real, the scenario's is "
+        "int; it lacks output 'runing' (bool); its output 'running' (bool) is not in the scenario "
+        "(did you mean 'runing'?)")
+
+
+def test_a_participant_under_an_unknown_name_is_refused(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        name: line
+        run: {duration: 0.1}
+        objects:
+          drive: {module: participant, inputs: {run: bool, speed_setpoint: real},
+                  outputs: {speed: real, running: bool}, join_timeout: 1}
+        """)
+    with Bus(BusSettings()) as bus, hub(path, bus=bus) as master:
+        with process("-m", "modules.belt_drive_logic", "--run", "line", "--name", "driev",
+                     "--connect", bus.endpoints[0], "--join-timeout", "5") as proc:
+            with pytest.raises(SimulationError, match=r"^participant 'drive' did not join within 1 s"):
+                master.run()
+            code, _, err = output_of(proc)
+    assert code == 1
+    assert err == ("planthub participant 'driev': the hub refused me: run 'line' has no participant 'driev' "
+                   "(did you mean 'drive'?)\n")
