@@ -25,16 +25,19 @@ def fmus():
     return build(ROOT / "build" / "fmus")
 
 
-@pytest.fixture(scope="module")
-def python_net(tmp_path_factory):
-    """The track-switch net run by the Petri reference interpreter inside a PythonFMU export."""
-    out = tmp_path_factory.mktemp("python_net")
+def export_net(out, net_file):
+    """A net run by the Petri reference interpreter inside a PythonFMU export: a third-party FMU."""
     env = {**os.environ, "PYTHONPATH": str(ROOT / "fmus")}
     subprocess.run([sys.executable, "-m", "pythonfmu", "build", "-f",
                     str(ROOT / "tests" / "fmu_models" / "python" / "petri_net_py.py"), "-d", str(out),
-                    str(ROOT / "fmus" / "petri"), str(ROOT / "fmus" / "nets" / "track_switch.pnml"),
+                    str(ROOT / "fmus" / "petri"), str(ROOT / "fmus" / "nets" / net_file),
                     str(ROOT / "schemas")], check=True, capture_output=True, env=env)
     return out / "petri_net_py.fmu"
+
+
+@pytest.fixture(scope="module")
+def python_net(tmp_path_factory):
+    return export_net(tmp_path_factory.mktemp("python_switch"), "track_switch.pnml")
 
 
 def rows(path):
@@ -149,11 +152,17 @@ def test_the_separator_net_lets_one_bottle_through_per_cycle_in_order(fmus, tmp_
     assert rows(tmp_path / "recording.csv")[-1]["sink.count.total"] == "4"
 
 
-def test_separator_logic_as_fmi3_gives_a_bit_identical_recording(fmus, tmp_path):
-    run_scenario(SEPARATOR, tmp_path / "fmi2", {"run.duration": 3.0})
-    run_scenario(SEPARATOR, tmp_path / "fmi3", {"run.duration": 3.0, "objects.sep.logic.file": str(fmus / "separator-fmi3.fmu")})
+@pytest.mark.parametrize("replacement", ["fmi3", "pythonfmu"])
+def test_replaced_separator_logic_gives_a_bit_identical_recording(fmus, tmp_path, replacement):
+    if replacement == "fmi3":
+        file = fmus / "separator-fmi3.fmu"
+    else:
+        file = export_net(tmp_path / "export", "separator.net.yaml")
+    run_scenario(SEPARATOR, tmp_path / "default", {"run.duration": 4.0})
+    run_scenario(SEPARATOR, tmp_path / replacement, {"run.duration": 4.0, "objects.sep.logic.file": str(file)})
     for name in ("recording.csv", "events.csv"):
-        assert (tmp_path / "fmi2" / name).read_bytes() == (tmp_path / "fmi3" / name).read_bytes()
+        assert (tmp_path / "default" / name).read_bytes() == (tmp_path / replacement / name).read_bytes()
+    assert sum(1 for e in rows(tmp_path / replacement / "events.csv") if e["slot"] == "out.trigger.on_enter") >= 2
 
 
 ROBOT = ROOT / "scenarios" / "robot_logic.yaml"

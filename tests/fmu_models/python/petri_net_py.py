@@ -6,7 +6,7 @@ import os
 
 from petri.interpreter import Interpreter
 from petri.load import load_net, net_name
-from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer
+from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real
 
 
 class petri_net_py(Fmi2Slave):
@@ -32,9 +32,14 @@ class petri_net_py(Fmi2Slave):
             for suffix, kind in (("tokens", Integer), ("marked", Boolean), ("got", Boolean)):
                 self.register_variable(kind(f"{name}_{suffix}", causality=Fmi2Causality.output,
                                             variability=Fmi2Variability.discrete))
+        for transition in self.net.delayed:
+            setattr(self, f"{transition.name}_delay", transition.delay)
+            self.register_variable(Real(f"{transition.name}_delay", causality=Fmi2Causality.parameter,
+                                        variability=Fmi2Variability.fixed))
 
     def exit_initialization_mode(self):
         start = {f"{p.name}_initial": getattr(self, f"{p.name}_initial") for p in self.net.places}
+        start.update({f"{t.name}_delay": getattr(self, f"{t.name}_delay") for t in self.net.delayed})
         self.interpreter = Interpreter(self.net, start)
         self._publish()
 
