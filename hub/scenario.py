@@ -197,7 +197,7 @@ class _Checker:
     def build(self) -> Scenario:
         data = self.data
         run = self.run = self.run_settings(_dict(data.get("run")))
-        objects, slot_tables = self.objects(_dict(data.get("objects")))
+        objects, slot_tables = self.objects(_dict(data.get("objects")), self.defaults(_dict(data.get("defaults"))))
         # The logic's own wiring comes first, so a scenario's flows into the same slot win.
         flows = self.wiring(objects, slot_tables) + self.flows(_list(data.get("flows")), slot_tables)
         record = self.record(_list(data.get("record")), slot_tables)
@@ -233,7 +233,17 @@ class _Checker:
             master=run.get("master") if run.get("master") in ("jacobi", "gauss-seidel") else "jacobi",
             bus=_bus_settings(run["bus"]) if isinstance(run.get("bus"), dict) else None)
 
-    def objects(self, specs: dict):
+    def defaults(self, specs: dict) -> dict[str, dict]:
+        """The `defaults` section: module name → parameters its objects get unless they set them."""
+        out = {}
+        for module, params in specs.items():
+            if module not in self.registry:
+                self.problem(("defaults", module), f"unknown module {module!r}{did_you_mean(module, self.registry.names())}")
+            elif isinstance(params, dict):
+                out[module] = params
+        return out
+
+    def objects(self, specs: dict, defaults: dict[str, dict]):
         objects, tables, ids = [], {}, {}
         for name, spec in specs.items():
             at = ("objects", name)
@@ -244,7 +254,8 @@ class _Checker:
             except UnknownModule as exc:
                 self.problem(at + ("module",), str(exc))
                 continue
-            params = {k: v for k, v in spec.items() if k not in ("module", "logic")}
+            own = {k: v for k, v in spec.items() if k not in ("module", "logic")}
+            params = {**defaults.get(spec["module"], {}), **own}
             before = len(self.problems)
             self.validate(params, module.PARAMETERS, at)
             if len(self.problems) > before:

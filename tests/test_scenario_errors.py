@@ -264,3 +264,21 @@ def test_a_belt_placed_after_another_names_an_earlier_belt(write_scenario):
         f"{path}:6: objects.bend2.after: object 'lamp' is a light_barrier, not a conveyor or curve (known: belt_1)",
         f"{path}:7: objects.early.after: no conveyor or curve 'late' is declared before this object (known: belt_1)",
     ]
+
+
+def test_defaults_give_every_object_of_a_module_its_parameters(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        defaults:
+          bottle: {mass: 0.02, radius: 0.025}
+          botle: {mass: 1}
+        objects:
+          a: {module: bottle, position: [0, 0, 0]}
+          b: {module: bottle, position: [1, 0, 0], mass: 0.08}
+        """)
+    found, _ = problems(path)
+    assert found == [f"{path}:4: defaults.botle: unknown module 'botle' (did you mean 'bottle'?)"]
+    path.write_text(path.read_text().replace("  botle: {mass: 1}\n", ""))
+    params = {o.name: o.params for o in load_scenario(path).objects}
+    assert (params["a"]["mass"], params["a"]["radius"]) == (0.02, 0.025)
+    assert (params["b"]["mass"], params["b"]["radius"]) == (0.08, 0.025)
