@@ -1,1 +1,12 @@
-"""planthub: a co-simulation hub for automation plants."""
+"""planthub: a co-simulation hub for automation plants.
+
+`from hub import Simulation` is the Python API (hub/simulation.py)."""
+
+
+def __getattr__(name):
+    # Imported on first use, so `import hub` stays light for the modules that build on it.
+    if name == "Simulation":
+        from .simulation import Simulation
+
+        return Simulation
+    raise AttributeError(f"module 'hub' has no attribute {name!r}")

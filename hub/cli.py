@@ -31,6 +31,12 @@ def main(argv=None) -> int:
     check.add_argument("scenario", type=Path)
     _add_set(check)
 
+    test = sub.add_parser("test", help="run a scenario and judge its expectations (exit 1 if one fails)")
+    test.add_argument("scenario", type=Path)
+    test.add_argument("--junit", type=Path, metavar="FILE", help="also write the outcomes as JUnit XML")
+    test.add_argument("--out", type=Path, help="also write recording.csv and events.csv here")
+    _add_set(test)
+
     describe = sub.add_parser("describe", help="list a module's parameters and slots (no name: list modules)")
     describe.add_argument("module", nargs="?")
 
@@ -48,7 +54,7 @@ def main(argv=None) -> int:
 
     args = parser.parse_args(argv)
     try:
-        commands = {"run": _run, "validate": _validate, "describe": _describe, "check-fmu": _check_fmu,
+        commands = {"run": _run, "validate": _validate, "describe": _describe, "check-fmu": _check_fmu, "test": _test,
                     "report": _report, **bus_commands}
         return commands[args.command](args)
     except ScenarioError as exc:
@@ -228,3 +234,25 @@ def _check_fmu(args) -> int:
         fits = f"; fits in place of {args.like}" if reference is not None else ""
         print(f"  ✓ passes fmpy's validation{fits}")
     return 1 if problems else 0
+
+
+def _test(args) -> int:
+    from .junit import write_junit
+    from .simulation import Simulation
+
+    started = time.perf_counter()
+    with Simulation(args.scenario, _overrides(args), out=args.out) as sim:
+        if not sim.scenario.expect:
+            print(f"planthub: {args.scenario} has no `expect:` entries to judge", file=sys.stderr)
+            return 2
+        sim.run()
+        outcomes = sim.check()
+    seconds = time.perf_counter() - started
+    print(f"planthub test {sim.scenario.name}  ({args.scenario}, {sim.time:g} s simulated)")
+    for outcome in outcomes:
+        print(f"  {'✓' if outcome.passed else '✗'} {outcome.expectation.name} — {outcome.message}")
+    failed = sum(not o.passed for o in outcomes)
+    print(f"{len(outcomes) - failed} passed, {failed} failed")
+    if args.junit:
+        write_junit(args.junit, sim.scenario.name, outcomes, seconds)
+    return 1 if failed else 0

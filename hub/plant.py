@@ -37,6 +37,7 @@ class Plant:
             self.signals = Signals(slots)
             read = {f.source for f in scenario.flows} | {f.rearm for f in scenario.flows if f.rearm}
             read |= {ref for ref, _ in scenario.record}
+            read |= {ref for e in scenario.expect for ref in (e.slot, e.when, e.show) if ref is not None}
             for comp, local in zip(self.components, local_indices):
                 needed = frozenset(r.slot for r in read if (r.obj, r.component) == (comp.obj, comp.name))
                 comp.bind(self.signals, local, needed)

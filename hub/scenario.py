@@ -11,6 +11,7 @@ import jsonschema
 
 from . import flowgraph
 from .errors import Problem, ScenarioError
+from .expectations import Expectation
 from .flow import Condition, Mode
 from .logic import OPTIONS as LOGIC_OPTIONS
 from .logic import fmu_parameters
@@ -96,6 +97,7 @@ class Scenario:
     objects: tuple[ObjectSpec, ...]
     flows: tuple[FlowSpec, ...]
     record: tuple[tuple[SlotRef, SlotType], ...]
+    expect: tuple[Expectation, ...]
     order: tuple[tuple[str, object], ...]   # evaluation order of flows and feedthrough components
 
 
@@ -201,11 +203,12 @@ class _Checker:
         # The logic's own wiring comes first, so a scenario's flows into the same slot win.
         flows = self.wiring(objects, slot_tables) + self.flows(_list(data.get("flows")), slot_tables)
         record = self.record(_list(data.get("record")), slot_tables)
+        expect = self.expectations(_list(data.get("expect")), slot_tables, run)
         order = self.order(flows, objects)
         if self.problems:
             raise ScenarioError(self.problems)
         return Scenario(self.path, data.get("name", self.path.stem), data.get("description", ""),
-                        run, tuple(objects), tuple(flows), tuple(record), order)
+                        run, tuple(objects), tuple(flows), tuple(record), tuple(expect), order)
 
     def run_settings(self, run: dict) -> RunSettings:
         def setting(key, default, kind=(int, float)):
@@ -415,6 +418,40 @@ class _Checker:
             r = self.resolve(text, ("record", i), tables, None)
             if r:
                 out.append((r[0], r[1].type))
+        return out
+
+    def expectations(self, specs: list, tables: dict, run: RunSettings) -> list[Expectation]:
+        out = []
+        for i, spec in enumerate(specs):
+            at = ("expect", i)
+            if not isinstance(spec, dict) or not _is_ref(spec.get("slot")):
+                continue
+            if ("is" in spec) == ("always" in spec):
+                self.problem(at, "give exactly one of `is` (a value at a time) and `always` (at every point)")
+                continue
+            if "at" in spec and "always" in spec:
+                self.problem(at + ("at",), "`at` goes with `is`; `always` is judged at every point")
+                continue
+            slot = self.resolve(spec["slot"], at + ("slot",), tables, None)
+            when = self.resolve(spec["when"], at + ("when",), tables, Direction.SOURCE) if _is_ref(spec.get("when")) else None
+            show = self.resolve(spec["show"], at + ("show",), tables, None) if _is_ref(spec.get("show")) else None
+            if when and when[1].type is not SlotType.VOID:
+                self.problem(at + ("when",), f"{when[0]} is {when[1].type.value}; `when` takes a void slot")
+                continue
+            if slot is None or (_is_ref(spec.get("when")) and when is None) or (_is_ref(spec.get("show")) and show is None):
+                continue
+            key = "is" if "is" in spec else "always"
+            (op, raw), = spec[key].items()
+            kind = slot[1].type
+            try:
+                value = (SlotType.BOOL if kind is SlotType.VOID else kind).coerce(raw)
+            except ValueError as exc:
+                self.problem(at + (key, op), f"{slot[0]} is {kind.value}: {exc}")
+                continue
+            tick = round(spec["at"] * run.physics_rate) if "at" in spec else None
+            name = spec.get("name") or f"{spec['slot']} {op} {raw!r}"
+            out.append(Expectation(name, slot[0], kind, op, value, key == "always", tick,
+                                   when[0] if when else None, show[0] if show else None, line_of(self.lines, at)))
         return out
 
     def order(self, flows: list[FlowSpec], objects: list[ObjectSpec]):

@@ -1,0 +1,124 @@
+"""The Python API: load a scenario, swap in your logic, run until a time or a condition, read slots."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable
+
+from .errors import PlanthubError
+from .expectations import Outcome, Watcher
+from .master import Master, RunResult
+from .plant import Plant
+from .recorder import Recorder
+from .registry import did_you_mean
+from .scenario import load_scenario
+from .slots import Direction, SlotRef, SlotType
+
+
+class Simulation:
+    """One scenario, built and at its first communication point.
+
+        with Simulation("scenarios/switch_logic.yaml", logic={"sw": "my_switch.fmu"}) as sim:
+            sim.run_until(lambda s: s["branch_end.count.total"] == 1, timeout=10)
+            assert sim["main_end.count.total"] == 0
+            assert all(outcome.passed for outcome in sim.check())
+
+    `overrides` take dotted keys as `--set` does; `logic` maps an object to a replacement FMU for
+    its state logic. Every source slot is computed (not only the ones flows and the recording
+    read), so any slot can be read at any point. `out` writes recording.csv and events.csv.
+    """
+
+    def __init__(self, scenario, overrides: dict | None = None, logic: dict | None = None,
+                 out: Path | None = None):
+        changes = dict(overrides or {})
+        for name, file in (logic or {}).items():
+            changes[f"objects.{name}.logic"] = {"file": str(Path(file).resolve())}
+        self.scenario = load_scenario(scenario, changes)
+        self.plant = Plant(self.scenario)
+        try:
+            for comp in self.plant.components:
+                comp.needed = frozenset(s.name for s in comp.SLOTS if s.direction is Direction.SOURCE)
+            run = self.scenario.run
+            columns = [(ref, kind, self.plant.index[ref]) for ref, kind in self.scenario.record]
+            self.events: list[tuple[float, str, str]] = []
+            self.recorder = _Recorder(columns, run.physics_rate, out, log=self.events)
+            self.master = Master(self.plant, self.recorder)
+            self.watcher = Watcher(list(self.scenario.expect), self.plant.index, run.physics_rate)
+            self.master.communicate()
+            self._observe(self.master.tick)
+        except BaseException:
+            self.close()
+            raise
+
+    @property
+    def time(self) -> float:
+        return self.master.tick / self.scenario.run.physics_rate
+
+    def run(self, until: float | None = None) -> RunResult:
+        """Run to `until` seconds (default: the scenario's duration)."""
+        end = None if until is None else round(until * self.scenario.run.physics_rate)
+        return self.master.run(end, progress=lambda tick, _: self._observe(tick))
+
+    def run_until(self, condition: Callable[["Simulation"], bool], timeout: float) -> bool:
+        """Step until `condition(sim)` holds at a communication point (True) or `timeout`
+        simulated seconds have passed (False)."""
+        limit = self.master.tick + round(timeout * self.scenario.run.physics_rate)
+        while not condition(self):
+            if self.master.tick >= limit:
+                return False
+            self.master.advance(limit)
+            self.master.communicate()
+            self._observe(self.master.tick)
+        return True
+
+    def _observe(self, tick: int) -> None:
+        self.watcher.observe(tick, self.plant.signals)
+
+    def __getitem__(self, slot: str):
+        """The slot's value now (a void slot: whether it fired at this point)."""
+        ref = self._ref(slot)
+        i = self.plant.index[ref]
+        if self.plant.signals.slots[i].type is SlotType.VOID:
+            return self.plant.signals.fired(i)
+        return self.plant.signals.values[i]
+
+    def _ref(self, slot: str) -> SlotRef:
+        parts = slot.split(".")
+        if len(parts) == 3:
+            ref = SlotRef(*parts)
+            if ref in self.plant.index:
+                return ref
+        elif len(parts) == 2:
+            found = [r for r in self.plant.index if (r.obj, r.slot) == tuple(parts)]
+            if len(found) == 1:
+                return found[0]
+        names = [str(r) for r in self.plant.index]
+        raise PlanthubError(f"no slot {slot!r} in {self.scenario.path}{did_you_mean(slot, names)}")
+
+    def check(self) -> list[Outcome]:
+        """The scenario's expectations judged on what was seen so far."""
+        return self.watcher.judge()
+
+    def close(self) -> None:
+        try:
+            if getattr(self, "recorder", None) is not None:
+                self.recorder.close()
+        finally:
+            self.plant.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+class _Recorder(Recorder):
+    """A recorder that also keeps the event log in memory, as (time, slot, detail)."""
+
+    def __init__(self, columns, rate, directory, log: list):
+        super().__init__(columns, rate, directory)
+        self.log = log
+
+    def event(self, tick: int, slot: str, detail: str) -> None:
+        super().event(tick, slot, detail)
+        self.log.append((tick / self.rate, slot, detail))
