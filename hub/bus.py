@@ -124,10 +124,9 @@ class Bus:
         return Publisher(self, pub, key)
 
     def put(self, key: str, payload: bytes, encoding: str) -> None:
-        self._session.put(key, payload, encoding=zenoh.Encoding(encoding))
-
-    def delete(self, key: str) -> None:
-        self._session.delete(key)
+        """One message (a command, a hello, a rate request): blocks rather than drops when congested."""
+        self._session.put(key, payload, encoding=zenoh.Encoding(encoding),
+                          congestion_control=zenoh.CongestionControl.BLOCK)
 
     # --- receiving ---------------------------------------------------------------------
     def subscribe(self, key: str, deliver) -> None:
@@ -234,14 +233,6 @@ def key_intersects(a: str, b: str) -> bool:
         return zenoh.KeyExpr(a).intersects(zenoh.KeyExpr(b))
     except zenoh.ZError as exc:
         raise BusError(f"not a key expression: {a!r} or {b!r}: {_cause(exc)}") from None
-
-
-def check_key_expr(key: str) -> str:
-    try:
-        zenoh.KeyExpr(key)
-    except zenoh.ZError as exc:
-        raise BusError(f"not a key expression: {key!r}: {_cause(exc)}") from None
-    return key
 
 
 # A session with a callback subscriber that is never closed keeps the interpreter from exiting:

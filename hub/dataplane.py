@@ -6,8 +6,8 @@ point publishes only the slots that have one, so a slot nobody reads costs nothi
 slot nothing else reads is computed only while it is watched. A viewer asks for a rate with
 `{"key": KEYEXPR, "period": SECONDS}` on `plant/<run>/@cosim/viewer/<id>/rate`, holding the
 liveliness token `plant/<run>/@cosim/viewer/<id>`; a slot goes out at the fastest rate asked for
-a key expression that covers it (`run.bus.publish_period` where none does), and a viewer's
-requests end with its token. A sample's payload is the raw value (schemas/wire.md), its
+a key expression that covers it (`run.bus.publish_period` where none does; a void slot at every
+point it fires), and a viewer's requests end with its token. A sample's payload is the raw value (schemas/wire.md), its
 attachment the tick of its communication point (uint64, little-endian).
 """
 from __future__ import annotations
@@ -70,12 +70,12 @@ class DataPlane:
         values, fired = signals.values, signals.fired
         attachment = wire.TICK.pack(tick)
         for e in self.live:
-            if tick < e.due:
-                continue
-            if e.void:
+            if e.void:   # an event is sent whenever it fires: a slower rate must not lose it
                 if not fired(e.index):
                     continue
                 payload = b""
+            elif tick < e.due:
+                continue
             else:
                 payload = e.pack(values[e.index])
             e.put(payload, attachment=attachment)

@@ -83,8 +83,9 @@ class _Peer:
     welcomed: bool = False
     ready: bool = False                # initial outputs received after the last welcome
     lost: bool = False
-    in_order: list = field(default_factory=list)    # wire position → scenario input index
+    in_order: list | None = None       # wire position → scenario input index (None: the same order)
     out_order: list = field(default_factory=list)   # scenario output index → wire position
+    readers: list = field(default_factory=list)     # per scenario output: wire value → slot value
     result_n: int | None = None
     result: list | None = None
     pending: bytes | None = None       # the last step message, re-sent to a participant that rejoins
@@ -141,8 +142,11 @@ class Lockstep:
     def _launch(self, peer: _Peer) -> Launched:
         spec = peer.slave.spec
         connect = [local_endpoint(e) for e in self.bus.endpoints] + list(self.bus.settings.connect)
+        # A Zenoh router forwards only for clients; a peer hub talks to its peers directly.
+        mode = "peer" if self.bus.settings.mode == "peer" else "client"
         env = {"PLANTHUB_RUN": self.run, "PLANTHUB_NAME": spec.name, "PLANTHUB_CONNECT": ",".join(connect),
-               "PLANTHUB_LEASE": repr(self.lease), "PLANTHUB_JOIN_TIMEOUT": repr(spec.join_timeout)}
+               "PLANTHUB_MODE": mode, "PLANTHUB_LEASE": repr(self.lease),
+               "PLANTHUB_JOIN_TIMEOUT": repr(spec.join_timeout)}
         return Launched(spec.name, list(spec.command), spec.cwd, env)
 
     def _wait_ready(self, peers: list[_Peer], verb: str) -> None:
@@ -189,8 +193,7 @@ class Lockstep:
     # --- stepping -------------------------------------------------------------------------
     def send_step(self, slave: RemoteSlave, tick: int, ticks: int, t: float, h: float, values: list) -> None:
         peer = self.peers[slave.spec.name]
-        inputs = slave.spec.inputs
-        wired = [wire.to_wire(inputs[i][1], values[i]) for i in peer.in_order]
+        wired = values if peer.in_order is None else [values[i] for i in peer.in_order]
         peer.pending = wire.step_message(slave.sent, tick, ticks, t, h, wired)
         slave.sent += 1
         peer.from_tick = tick
@@ -216,8 +219,9 @@ class Lockstep:
 
     def poll(self) -> None:
         """Handle whatever arrived, without waiting (a loss is noticed even between two collects)."""
-        for item in self.inbox.drain():
-            self._dispatch(item)
+        if not self.inbox.empty():
+            for item in self.inbox.drain():
+                self._dispatch(item)
 
     # --- what arrives -------------------------------------------------------------------------
     def _dispatch(self, item) -> None:
@@ -277,8 +281,12 @@ class Lockstep:
                     return
             elif n != peer.slave.sent - 1:
                 return   # an answer to a step the hub no longer waits for (re-sent after a rejoin)
-            peer.result = [wire.from_wire(kind, values[peer.out_order[i]], f"output {slot!r} of step {n}")
-                           for i, (slot, kind) in enumerate(outputs)]
+            try:
+                peer.result = [read(values[j]) for read, j in zip(peer.readers, peer.out_order)]
+            except wire.WireError:
+                for (slot, kind), j in zip(outputs, peer.out_order):   # again, to name the slot
+                    wire.from_wire(kind, values[j], f"output {slot!r} of step {n}")
+                raise
             peer.result_n = n
         except wire.WireError as exc:
             self._fail(peer, f"sent a bad output message: {exc}")
@@ -296,7 +304,9 @@ class Lockstep:
             inputs = wire.read_interface(hello.get("inputs"), "inputs")
             outputs = wire.read_interface(hello.get("outputs"), "outputs")
         except wire.WireError as exc:
-            self._welcome(name, None, error=f"bad hello: {exc}")
+            sent = wire.unpack(message.payload) if message.payload[:1] else None
+            ident = sent.get("id") if isinstance(sent, dict) and isinstance(sent.get("id"), str) else None
+            self._welcome(name, ident, error=f"bad hello: {exc}")
             return
         if peer is None:
             self._welcome(name, ident, error=f"run {self.run!r} has no participant {name!r}"
@@ -317,8 +327,10 @@ class Lockstep:
         in_names = [n for n, _ in inputs]
         out_names = [n for n, _ in outputs]
         spec = peer.slave.spec
-        peer.in_order = [[n for n, _ in spec.inputs].index(n) for n in in_names]
+        in_order = [[n for n, _ in spec.inputs].index(n) for n in in_names]
+        peer.in_order = None if in_order == sorted(in_order) else in_order
         peer.out_order = [out_names.index(n) for n, _ in spec.outputs]
+        peer.readers = [wire.reader(kind) for _, kind in spec.outputs]
         peer.id, peer.welcomed, peer.ready, peer.lost = ident, True, False, False
         peer.sent_at = time.monotonic()
         self._welcome(name, ident)

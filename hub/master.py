@@ -114,7 +114,9 @@ class Master:
         nothing in its results, and lets an event-driven step end early: the physics stops at
         the tick after a trigger event, the logic steps over exactly that interval, and the
         next step lasts one tick, so the logic's answer reaches the plant a tick later instead
-        of a whole communication step later.
+        of a whole communication step later. Without events the interval is known beforehand,
+        and the logic is stepped first: participants on the bus then compute while the physics
+        runs (same results, as they only answer at the next point).
         """
         run = self.plant.scenario.run
         start = self.world.tick
@@ -123,9 +125,13 @@ class Master:
         end = start + 1 if self._answering else (start // run.substeps + 1) * run.substeps
         if until_tick is not None:
             end = min(end, until_tick)
-        ticks = self.world.step(end - start, stop_on_event=run.event_driven)
+        if not run.event_driven:
+            self.plant.step_logic(start, end - start)   # Jacobi or Gauss-Seidel (run.master)
+            self.world.step(end - start, stop_on_event=False)
+            return
+        ticks = self.world.step(end - start, stop_on_event=True)
         self._answering = start + ticks < end
-        self.plant.step_logic(start, ticks)   # Jacobi or Gauss-Seidel (run.master)
+        self.plant.step_logic(start, ticks)
 
     def start(self) -> None:
         """Join the bus, launch and await the participants (once, before the first point)."""

@@ -74,6 +74,7 @@ class Participant:
         if problems:
             raise PlanthubError(f"{type(self).__name__}: " + "; ".join(problems))
         self._in, self._out = pairs
+        self._readers = [(name, wire.reader(kind)) for name, kind in self._in]
         return pairs[0], pairs[1]
 
     def begin(self, parameters: dict, time: float) -> None:
@@ -85,18 +86,21 @@ class Participant:
         self.start()
 
     def advance(self, t: float, h: float, values: list) -> list:
-        for (name, kind), value in zip(self._in, values):
-            setattr(self, name, wire.from_wire(kind, value, f"input {name!r}"))
+        try:
+            for (name, read), value in zip(self._readers, values):
+                setattr(self, name, read(value))
+        except wire.WireError:
+            for (name, kind), value in zip(self._in, values):   # again, to name the input
+                wire.from_wire(kind, value, f"input {name!r}")
+            raise
         self.step(t, h)
         return self.current_outputs()
 
     def current_outputs(self) -> list:
-        out = []
+        out = [getattr(self, name) for name, _ in self._out]
         for name, kind in self._out:
-            value = getattr(self, name)
             if kind is SlotType.VOID:
                 setattr(self, name, False)   # an event fires once
-            out.append(wire.to_wire(kind, value))
         return out
 
 

@@ -1,7 +1,6 @@
 """The wire format of the bus (schemas/wire.md): key expressions, slot value codecs, control messages."""
 from __future__ import annotations
 
-import math
 import re
 import struct
 
@@ -104,6 +103,22 @@ def to_wire(kind: SlotType, value):
     return value
 
 
+def reader(kind: SlotType):
+    """A fast function wire value → canonical slot value for this type; it raises WireError (without
+    context: the caller names the slot) for a value that does not fit."""
+    def check(value):
+        return from_wire(kind, value, "value")
+    if kind in (SlotType.VOID, SlotType.BOOL):
+        return lambda value: value if value is True or value is False else check(value)
+    if kind is SlotType.REAL:
+        return lambda value: value if type(value) is float else check(value)
+    if kind is SlotType.INT:
+        return lambda value: value if type(value) is int else check(value)
+    if kind is SlotType.STRING:
+        return lambda value: value if type(value) is str else check(value)
+    return check
+
+
 def from_wire(kind: SlotType, value, what: str):
     """The canonical slot value of a value received in a message; WireError names `what` if it does not fit."""
     if kind in (SlotType.VOID, SlotType.BOOL):
@@ -145,9 +160,13 @@ def read_interface(entries, what: str) -> list[tuple[str, SlotType]]:
     return out
 
 
+_hot = msgpack.Packer()   # step and output messages: packed on one thread (the hub's or a participant's main)
+
+
 def step_message(n: int, tick: int, ticks: int, t: float, h: float, inputs: list) -> bytes:
-    """Hub → participant: step `n` over [t, t + h] = ticks [tick, tick + ticks], with its inputs."""
-    return msgpack.packb([n, tick, ticks, t, h, inputs])
+    """Hub → participant: step `n` over [t, t + h] = ticks [tick, tick + ticks], with its inputs
+    (a tuple packs as an array, so vec3 and quat values need no conversion)."""
+    return _hot.pack([n, tick, ticks, t, h, inputs])
 
 
 def read_step(data: bytes):
@@ -159,13 +178,9 @@ def read_step(data: bytes):
 
 def output_message(n: int, outputs: list) -> bytes:
     """Participant → hub: the outputs after step `n` (n = -1: the initial outputs, before any step)."""
-    return msgpack.packb([n, outputs])
+    return _hot.pack([n, outputs])
 
 
 def error_message(n: int, error: str) -> bytes:
     """Participant → hub, instead of outputs: step `n` failed."""
     return pack({"step": n, "error": error})
-
-
-def finite(x: float) -> bool:
-    return isinstance(x, float) and math.isfinite(x)

@@ -193,6 +193,10 @@ def main() -> int:
     fmu_stepping()
     event_latency()
     plant_elements()
+    from .bench_bus import bus_lockstep, data_plane   # Zenoh: lockstep beside bare ping-pong, data plane
+
+    bus_lockstep()
+    data_plane()
     return 0
 
 

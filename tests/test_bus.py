@@ -80,3 +80,34 @@ def wait_for(condition, timeout=5.0):
     from hub.bus import wait_until
 
     return wait_until(condition, timeout)
+
+
+def test_a_bad_bus_section_is_reported_with_the_scenario_problems(write_scenario):
+    from hub.errors import ScenarioError
+    from hub.scenario import load_scenario
+
+    path = write_scenario("""
+        planthub: 1
+        run: {bus: {mode: pear, lease: 0, listen: [7447], on_loss: retry}}
+        objects:
+          c: {module: constant, type: real, value: 1}
+        """)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    assert [str(p) for p in info.value.problems] == [
+        f"{path}:2: run.bus.lease: 0 is less than or equal to the minimum of 0",
+        f"{path}:2: run.bus.listen[0]: 7447 is not of type 'string'",
+        f"{path}:2: run.bus.mode: 'pear' is not one of ['peer', 'client', 'router']",
+        f"{path}:2: run.bus.on_loss: 'retry' is not one of ['stop', 'pause']"]
+
+
+def test_the_bus_section_with_its_defaults(write_scenario):
+    from hub.scenario import load_scenario
+
+    path = write_scenario("""
+        planthub: 1
+        run: {bus: {listen: [tcp/0.0.0.0:7447], on_loss: pause}}
+        objects:
+          c: {module: constant, type: real, value: 1}
+        """)
+    assert load_scenario(path).run.bus == BusSettings(listen=("tcp/0.0.0.0:7447",), on_loss="pause")

@@ -2,7 +2,7 @@
 as a pure-Python participant gives the same recording, byte for byte; joining is checked and named."""
 import pytest
 
-from hub.bus import Bus
+from hub.bus import Bus, wait_until
 from hub.errors import SimulationError
 from hub.scenario import BusSettings
 
@@ -182,3 +182,45 @@ def test_a_participant_under_an_unknown_name_is_refused(write_scenario):
     assert code == 1
     assert err == ("planthub participant 'driev': the hub refused me: run 'line' has no participant 'driev' "
                    "(did you mean 'drive'?)\n")
+
+
+def test_a_participant_written_from_the_wire_document_alone_fits(in_process, tmp_path):
+    """tests/participants/from_the_doc.py: literal keys and msgpack, its own order of inputs and outputs."""
+    run_scenario(BELT_PARTICIPANT, tmp_path,
+                 {"objects.drive.command": ["python", "-m", "tests.participants.from_the_doc"],
+                  "objects.drive.cwd": str(ROOT)})
+    assert same_files(in_process, tmp_path)
+
+
+def test_every_control_message_of_a_run_follows_the_wire_schema(tmp_path):
+    """A tap on plant/<run>/@cosim/** sees hello, welcome, steps, outputs and states (the hub runs as a
+    Zenoh router and the others as its clients, so it forwards what participants send); each is checked
+    against schemas/wire.schema.json."""
+    import json
+
+    import jsonschema
+
+    from hub import wire
+    from hub.bus import Inbox
+
+    schema = json.loads((ROOT / "schemas" / "wire.schema.json").read_text())
+    seen = Inbox()
+    with Bus(BusSettings(mode="router")) as bus, hub(BELT_PARTICIPANT, tmp_path, {"run.duration": 0.2}, bus=bus) as master:
+        with Bus(BusSettings(mode="client", connect=bus.endpoints)) as tap:
+            tap.subscribe("plant/belt_ramp_participant/@cosim/**", seen.put)
+            assert wait_until(lambda: bus.publisher("plant/belt_ramp_participant/@cosim/probe", "x").matching, 5)
+            master.run()
+            messages = []
+            while (message := seen.get(1.0)) is not None:
+                messages.append(message)
+    kinds = {}
+    for message in messages:
+        kind = message.key.rsplit("/", 1)[-1]
+        if kind == "probe":
+            continue
+        assert message.encoding == "application/msgpack", message.key
+        definition = {"result": "command_result"}.get(kind, kind)
+        jsonschema.Draft202012Validator({**schema, "$ref": f"#/$defs/{definition}"}).validate(wire.unpack(message.payload))
+        kinds[kind] = kinds.get(kind, 0) + 1
+    assert kinds["step"] == kinds["output"] - 1 == 10   # 0.2 s of 20 ms steps; the initial outputs
+    assert {"hello", "welcome", "state"} <= set(kinds)

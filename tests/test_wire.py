@@ -73,3 +73,10 @@ def test_commands_follow_the_schema():
     check("command", wire.unpack(command_message("set", "belt.drive.speed", 0.2, "hmi", "42")))
     check("command", wire.unpack(command_message("force", "stopper.gate.position", (0.0, 0.0, 1.0))))
     check("command", wire.unpack(command_message("stop")))
+
+
+def test_readers_take_the_right_type_fast_and_name_the_wrong_one():
+    assert wire.reader(SlotType.REAL)(0.25) == 0.25 and wire.reader(SlotType.REAL)(2) == 2.0
+    assert wire.reader(SlotType.VEC3)([0, 1.5, 2]) == (0.0, 1.5, 2.0)
+    with pytest.raises(wire.WireError, match=r"value: expected a bool, got 1"):
+        wire.reader(SlotType.BOOL)(1)
