@@ -133,6 +133,10 @@ class PhysicsWorld:
 
     def add_static_boxes(self, centers, half_extents, yaws) -> None:
         """One fixed body made of boxes (a guard rail along an arc), frictionless like every rail."""
+        self._frictionless(self._boxes_body(centers, half_extents, yaws))
+
+    def _boxes_body(self, centers, half_extents, yaws) -> int:
+        """A fixed body made of yawed boxes placed in the world frame."""
         shape = self._call(
             pybullet.createCollisionShapeArray,
             shapeTypes=[pybullet.GEOM_BOX] * len(centers),
@@ -140,7 +144,7 @@ class PhysicsWorld:
             collisionFramePositions=[list(c) for c in centers],
             collisionFrameOrientations=[pybullet.getQuaternionFromEuler((0.0, 0.0, y)) for y in yaws],
         )
-        self._frictionless(self._call(pybullet.createMultiBody, baseMass=0.0, baseCollisionShapeIndex=shape))
+        return self._call(pybullet.createMultiBody, baseMass=0.0, baseCollisionShapeIndex=shape)
 
     def add_belt_field(self, line: Straight | Arc, half_width: float, z_lo: float, z_hi: float, k: float,
                        speed: float, grip: str = "surface", per_mass: bool = True) -> int:
@@ -244,14 +248,7 @@ class PhysicsWorld:
     def add_switchable_boxes(self, centers, half_extents, yaws, solid: bool) -> int:
         """One fixed body of boxes (a switch blade, a gate) whose collision the plant turns on and
         off, as the paper does; returns its number for `set_solid`."""
-        shape = self._call(
-            pybullet.createCollisionShapeArray,
-            shapeTypes=[pybullet.GEOM_BOX] * len(centers),
-            halfExtents=[list(h) for h in half_extents],
-            collisionFramePositions=[list(c) for c in centers],
-            collisionFrameOrientations=[pybullet.getQuaternionFromEuler((0.0, 0.0, y)) for y in yaws],
-        )
-        body = self._call(pybullet.createMultiBody, baseMass=0.0, baseCollisionShapeIndex=shape)
+        body = self._boxes_body(centers, half_extents, yaws)
         self._frictionless(body)
         self._switchable.append(body)
         self.set_solid(len(self._switchable) - 1, solid)
