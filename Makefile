@@ -7,7 +7,7 @@ SCENARIO ?= scenarios/belt_bottle_sensor.yaml
 
 .PHONY: run test bench fmus venv clean clean-venv
 
-run: $(STAMP)
+run: $(STAMP) fmus
 	$(PY) -m hub run $(SCENARIO)
 
 test: $(STAMP) fmus
