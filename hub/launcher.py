@@ -58,9 +58,13 @@ class Launched:
         return "\n".join(f"    {line}" for line in text)
 
     def stop(self, grace: float = 3.0) -> None:
-        """Wait `grace` s for the process to end by itself (it was told the run stopped), then make it."""
+        """Wait `grace` s for the process to end by itself (it was told the run stopped), then make it.
+        With no grace (a lost participant: maybe frozen, where SIGTERM would wait) it is killed at once."""
         try:
-            if self.poll(grace) is None:
+            if grace <= 0 and self.poll() is None:
+                self.process.kill()
+                self.process.wait(5.0)
+            elif self.poll(grace) is None:
                 self.process.terminate()
                 if self.poll(2.0) is None:
                     self.process.kill()

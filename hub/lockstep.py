@@ -101,16 +101,18 @@ class _Peer:
 
 class Lockstep:
     """Coordinates every participant of one run on the bus (none is fine: the hub still shows
-    itself and its run state to viewers). `log(text)` receives notices such as a pause."""
+    itself and its run state to viewers). `log(text)` receives what happened to the run (a pause,
+    a resumption: the event log keeps it), `warn(text)` what happened beside it (a stranger refused)."""
 
     def __init__(self, bus: Bus, run: str, slaves: list[RemoteSlave], *, lease: float, on_loss: str,
-                 rate: int, log=lambda text: None):
+                 rate: int, log=lambda text: None, warn=lambda text: None):
         self.bus = bus
         self.run = run
         self.lease = lease
         self.on_loss = on_loss
         self.rate = rate
         self.log = log
+        self.warn = warn
         self.peers = {s.spec.name: _Peer(s) for s in slaves}
         self.inbox = Inbox()
         self.tick = 0
@@ -149,12 +151,13 @@ class Lockstep:
                "PLANTHUB_JOIN_TIMEOUT": repr(spec.join_timeout)}
         return Launched(spec.name, list(spec.command), spec.cwd, env)
 
-    def _wait_ready(self, peers: list[_Peer], verb: str) -> None:
-        """Wait until every peer in `peers` is welcomed and sent its initial outputs, each within its
-        join timeout; a launched process that ends first is reported with its last output lines."""
+    def _wait_ready(self, peers: list[_Peer], verb: str, done=lambda peer: peer.ready) -> None:
+        """Wait until every peer in `peers` is welcomed and sent its initial outputs (or is `done`
+        otherwise), each within its join timeout; a launched process that ends first is reported
+        with its last output lines."""
         started = time.monotonic()
         while True:
-            waiting = [p for p in peers if not p.ready]
+            waiting = [p for p in peers if not done(p)]
             if not waiting:
                 return
             now = time.monotonic()
@@ -304,14 +307,17 @@ class Lockstep:
             inputs = wire.read_interface(hello.get("inputs"), "inputs")
             outputs = wire.read_interface(hello.get("outputs"), "outputs")
         except wire.WireError as exc:
-            sent = wire.unpack(message.payload) if message.payload[:1] else None
+            try:
+                sent = wire.unpack(message.payload)
+            except wire.WireError:
+                sent = None
             ident = sent.get("id") if isinstance(sent, dict) and isinstance(sent.get("id"), str) else None
             self._welcome(name, ident, error=f"bad hello: {exc}")
             return
         if peer is None:
             self._welcome(name, ident, error=f"run {self.run!r} has no participant {name!r}"
                                              f"{did_you_mean(name, self.peers)}")
-            self.log(f"refused participant {name!r}: the scenario has no such logic object")
+            self.warn(f"refused participant {name!r}: the scenario has no such logic object")
             return
         if peer.welcomed and not peer.lost:
             if ident == peer.id:
@@ -374,12 +380,16 @@ class Lockstep:
         if peer.process is not None:
             peer.process.stop(grace=0.0)
             peer.process = self._launch(peer)
-        self._wait_ready([peer], "rejoin")
-        if peer.pending is not None and peer.result_n != peer.slave.sent - 1:
+        # It comes back with a new hello — or, if it only stalled and never lost its connection,
+        # with its late answer.
+        answered = lambda p: p.result_n == p.slave.sent - 1
+        self._wait_ready([peer], "rejoin", done=lambda p: p.ready or answered(p))
+        if not answered(peer):
             peer.sent_at = time.monotonic()
             peer.step_pub.put(peer.pending)
+        peer.lost, peer.welcomed = False, True
         self.publish_state("running")
-        self.log(f"resumed: {spec.label} rejoined")
+        self.log(f"resumed: {spec.label} {'rejoined' if peer.ready else 'answered late'}")
 
     # --- the end ------------------------------------------------------------------------------
     def publish_state(self, state: str, reason: str = "") -> None:

@@ -4,10 +4,16 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
+from .bus import Bus, local_endpoint
+from .commands import Commands
 from .component import Component
+from .dataplane import DataPlane
+from .lockstep import Lockstep, RemoteSlave
 from .plant import Plant
 from .recorder import Recorder
+from .scenario import BusSettings
 from .slots import Direction, SlotType
+from .wire import check_run_name
 
 
 @dataclass(frozen=True)
@@ -37,7 +43,8 @@ class Master:
     then, to reach the next point, 5. the world runs the communication step's physics
     substeps (with `event_driven`, it stops at the tick after a trigger event), and 6. logic
     components (FMUs) step over the same interval from t with the inputs flows gave them at t
-    (Jacobi: their outputs appear at the next point).
+    (Jacobi: their outputs appear at the next point; without `event_driven` they are stepped
+    before the physics, which gives the same results and lets participants compute meanwhile).
     Time is the physics tick count; seconds are only derived for output.
 
     With a bus (given, or opened from `run.bus` when logic is served by participants): before
@@ -50,8 +57,6 @@ class Master:
 
     def __init__(self, plant: Plant, recorder: Recorder | None = None, *, bus=None, commands=None,
                  pacer=None, log=None):
-        from .lockstep import RemoteSlave
-
         self.plant = plant
         self.world = plant.world
         self.recorder = recorder or Recorder([], plant.scenario.run.physics_rate)
@@ -138,23 +143,11 @@ class Master:
         if self._started:
             return
         self._started = True
-        from .commands import Commands
-
         scenario = self.plant.scenario
-        settings = scenario.run.bus
         if self.bus is None and self._remote:
-            from .bus import Bus
-            from .scenario import BusSettings
-
-            self.bus, self._own_bus = Bus(settings or BusSettings()), True
+            self.bus, self._own_bus = Bus(scenario.run.bus or BusSettings()), True
         if self.bus is None:
             return
-        from .dataplane import DataPlane
-        from .lockstep import Lockstep
-        from .wire import check_run_name
-
-        from .bus import local_endpoint
-
         settings = self.bus.settings
         run = check_run_name(scenario.name)
         where = ", ".join(local_endpoint(e) for e in self.bus.endpoints) or ", ".join(settings.connect)
@@ -166,7 +159,7 @@ class Master:
             self.commands = Commands(self.plant, self.recorder)
             self.commands.listen(self.bus, run)
         self.lockstep = Lockstep(self.bus, run, self._remote, lease=settings.lease, on_loss=settings.on_loss,
-                                 rate=self.world.rate, log=self._notice)
+                                 rate=self.world.rate, log=self._notice, warn=self.log)
         self.lockstep.start(self.world.tick)
 
     def _notice(self, text: str) -> None:

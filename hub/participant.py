@@ -111,7 +111,8 @@ def add_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--name", default=env("PLANTHUB_NAME"), help="the logic object this participant serves")
     parser.add_argument("--connect", action="append", metavar="ENDPOINT",
                         help="the hub's (or a router's) endpoint, e.g. tcp/192.168.1.5:7447; repeatable")
-    parser.add_argument("--mode", default=env("PLANTHUB_MODE", "peer"), choices=["peer", "client"])
+    parser.add_argument("--mode", default=env("PLANTHUB_MODE", "peer"), choices=["peer", "client"],
+                        help="peer: connect to the hub itself; client: through a Zenoh router (or a router hub)")
     parser.add_argument("--lease", type=float, default=float(env("PLANTHUB_LEASE", "1.0")),
                         help="s after which the hub declares this process frozen")
     parser.add_argument("--join-timeout", type=float, default=float(env("PLANTHUB_JOIN_TIMEOUT", "30")),
@@ -241,8 +242,8 @@ class _Link:
                 if not welcome.get("accepted"):
                     raise PlanthubError(f"the hub refused me: {welcome.get('error')}")
                 break
-            elif kind == "state" and wire.unpack(value).get("state") == "stopped" and self.last is not None:
-                raise PlanthubError("the run stopped before I could rejoin")
+            elif kind == "state" and wire.unpack(value).get("state") == "stopped":
+                raise PlanthubError(f"the run stopped before I could {'re' if self.last else ''}join")
         if self.last is None:
             self.logic.begin(dict(welcome.get("parameters") or {}), float(welcome.get("time", 0.0)))
         self.output.put(wire.output_message(-1, self.logic.current_outputs() if self.last is None

@@ -7,11 +7,11 @@
 
 The process (any language: schemas/wire.md; in Python: `hub.participant`) announces the same
 inputs and outputs and gets `parameters` when the hub welcomes it. With `command` the hub starts
-it (in `cwd`, default the scenario's folder; `python` means the hub's own interpreter) and stops it at the end;
-without, it waits `join_timeout` s for one started elsewhere (`--run`, `--name`, `--connect`).
-Like an FMU it steps from t to t + h with the inputs of t, and its outputs appear at t + h;
-`step` gives it its own, longer step. A void input is true in the steps a flow fed it; a void
-output true fires the event.
+it (in `cwd`, default the scenario's folder; `python` is the hub's own interpreter) and stops it
+at the end; without, it waits `join_timeout` s for one started elsewhere (`--run`, `--name`,
+`--connect`). Like an FMU it steps from t to t + h with the inputs of t, and its outputs appear
+at t + h; `step` gives it its own, longer step. A void input is true in the steps a flow fed it;
+a void output true fires the event.
 """
 from __future__ import annotations
 
@@ -36,7 +36,7 @@ class ParticipantModule(Module):
                         "additionalProperties": {"enum": _TYPES}, "description": "output name → slot type (source slots)"},
             "parameters": {"type": "object", "default": {}, "description": "values sent to the participant when it joins"},
             "command": {"type": "array", "items": {"type": "string"}, "minItems": 1,
-                        "description": "the hub starts this command (cwd: the scenario's folder); without: it joins by itself"},
+                        "description": "the hub starts this command (in cwd); without: it joins by itself"},
             "cwd": {"type": "string", "x-path": True, "default": ".",
                     "description": "folder the command runs in, relative to the scenario file"},
             "join_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,

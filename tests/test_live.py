@@ -82,6 +82,19 @@ def test_a_viewer_asks_for_a_slower_rate(bus):
     assert speed_ticks == list(range(0, 900, 15))   # every 0.1 s = every fifth point of 20 ms
 
 
+def test_an_event_is_sent_whenever_it_fires_whatever_the_rate(bus):
+    with hub(STOP, bus=bus) as master, Viewer("stop_at_barrier", bus.endpoints) as viewer:
+        master.start()
+        viewer.watch("barrier/trigger/*", period=100.0)
+        settle(master, lambda: master.dataplane.requests and len(master.dataplane.live) > 2)
+        master.run()
+        events = []
+        while (sample := viewer.next(1.0)) is not None:
+            if sample.slot == "barrier.trigger.on_enter":
+                events.append(sample)
+    assert len(events) == 1 and events[0].value is None and events[0].tick > 0
+
+
 def test_a_body_slot_is_computed_only_while_someone_watches_it(bus):
     with hub(STOP, bus=bus) as master:
         bottle = next(c for c in master.plant.components if (c.obj, c.name) == ("bottle", "body"))

@@ -5,6 +5,7 @@ import pytest
 from hub.bus import Bus, wait_until
 from hub.errors import SimulationError
 from hub.scenario import BusSettings
+from hub.slots import SlotType
 
 from .bus_support import BELT_FMU, BELT_PARTICIPANT, hub, output_of, process, same_files
 from .fmus.fmu_support import build
@@ -224,3 +225,39 @@ def test_every_control_message_of_a_run_follows_the_wire_schema(tmp_path):
         kinds[kind] = kinds.get(kind, 0) + 1
     assert kinds["step"] == kinds["output"] - 1 == 10   # 0.2 s of 20 ms steps; the initial outputs
     assert {"hello", "welcome", "state"} <= set(kinds)
+
+
+def test_a_served_fmu_announces_the_fmu_module_slots_with_events_and_renames(fmus):
+    from hub.fmu_participant import FmuParticipant
+    from modules.fmu import Fmu
+
+    params = Fmu.with_defaults({"file": str(FMU), "events": ["run"], "map": {"speed": "belt_speed"},
+                                "participant": "launch"})
+    inputs, outputs = FmuParticipant(str(FMU), ["run"], {"speed": "belt_speed"}).interface()
+    assert [(s.name, s.type) for s in Fmu.slots(params)["logic"]] == inputs + outputs
+    assert ("run", SlotType.VOID) in inputs and ("belt_speed", SlotType.REAL) in outputs
+    assert Fmu.serve_command(params)[3:] == ["serve-fmu", str(FMU), "--event", "run", "--map", "speed=belt_speed"]
+
+
+def test_isolate_and_participant_exclude_each_other(fmus, write_scenario):
+    from hub.errors import ScenarioError
+    from hub.scenario import load_scenario
+
+    path = write_scenario(f"""
+        planthub: 1
+        objects:
+          drive: {{module: fmu, file: {FMU}, isolate: true, participant: launch}}
+        """)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    assert [str(p) for p in info.value.problems] == [
+        f"{path}:3: objects.drive.isolate: isolate and participant exclude each other: a child process over "
+        f"a pipe, or a participant over the bus"]
+
+
+@pytest.mark.parametrize("settings", [{"objects.drive.step": 0.1}, {"run.event_driven": True}],
+                         ids=["own longer step", "event-driven points"])
+def test_a_participant_matches_the_fmu_with_its_own_step_and_with_event_driven_points(fmus, settings, tmp_path):
+    run_scenario(BELT_FMU, tmp_path / "fmu", settings)
+    run_scenario(BELT_PARTICIPANT, tmp_path / "participant", settings)
+    assert same_files(tmp_path / "fmu", tmp_path / "participant")

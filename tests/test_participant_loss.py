@@ -114,3 +114,65 @@ def test_a_participant_whose_step_raises_stops_the_run_with_its_error(write_scen
         run_scenario(path)
     assert str(info.value) == ("participant 'drive' failed in step 10: ZeroDivisionError: asked to fail at "
                                "t = 0.5 s (at t = 0.55 s); the run stops here, the recording so far is kept")
+
+
+def test_an_output_of_the_wrong_type_is_named(write_scenario):
+    path = write_scenario(f"""
+        planthub: 1
+        run: {{duration: 1.0, physics_rate: 100, communication_step: 0.05}}
+        objects:
+          drive:
+            module: participant
+            inputs: {{run: bool, speed_setpoint: real}}
+            outputs: {{speed: real, running: bool}}
+            command: [python, -m, tests.participants.belt_drives, ints]
+            cwd: {ROOT}
+        """)
+    with pytest.raises(SimulationError) as info:
+        run_scenario(path)
+    assert str(info.value) == ("participant 'drive' sent a bad output message: output 'running' of step 0: "
+                               "expected a bool, got 0 (at t = 0.05 s); the run stops here, the recording so far "
+                               "is kept")
+
+
+@pytest.mark.parametrize("how", ["freezes", "stalls"])
+def test_with_the_pause_policy_a_participant_that_stops_for_a_while_carries_on_bit_for_bit(tmp_path, how):
+    """A joined participant stops answering for a second, three times the run's lease: frozen
+    (SIGSTOP; its connection expires and it says hello again when it thaws) or stalled in a step
+    (its connection stays; it answers late). The run pauses and goes on, and as the participant
+    kept its state the recording is the in-process one."""
+    import threading
+
+    from hub.bus import Bus
+    from hub.scenario import BusSettings
+
+    from .bus_support import BELT_FMU, BELT_PARTICIPANT, process, same_files
+
+    run_scenario(BELT_FMU, tmp_path / "reference")
+    scene = tmp_path / "joined.yaml"
+    scene.write_text(BELT_PARTICIPANT.read_text().replace("    command: [python, -m, modules.belt_drive_logic]\n", ""))
+    overrides = {"name": "line1"}
+    command = ["-m", "tests.participants.belt_drives", "plain"]
+    if how == "stalls":   # the step from t = 1.02 s takes a second
+        overrides["objects.drive.parameters"] = {"ramp": 0.5, "stall_at": 1.02, "stall": 1.0}
+        command[-1] = "stalls"
+    with Bus(BusSettings(lease=0.3, on_loss="pause")) as bus, \
+            hub(scene, tmp_path / "paused", overrides, bus=bus) as master:
+        with process(*command, "--run", "line1", "--name", "drive", "--connect", bus.endpoints[0]) as proc, \
+                resumed_at_exit(proc.pid):
+            master.run(until_tick=MID_RUN)
+            timer = None
+            if how == "freezes":
+                os.kill(proc.pid, signal.SIGSTOP)
+                timer = threading.Timer(1.0, os.kill, (proc.pid, signal.SIGCONT))
+                timer.start()
+            try:
+                master.run()
+            finally:
+                if timer is not None:
+                    timer.join()
+    notices = [r["detail"] for r in rows(tmp_path / "paused" / "events.csv") if r["slot"] == "@bus"]
+    assert [n.split(":")[0] for n in notices] == ["paused", "resumed"]
+    if how == "stalls":
+        assert notices[1] == "resumed: participant 'drive' answered late"
+    assert same_files(tmp_path / "reference", tmp_path / "paused", ("recording.csv",))

@@ -1,4 +1,5 @@
-"""Test participants: the belt drive slowed down on alternate steps, or failing at a given time."""
+"""Test participants: the belt drive slowed down on alternate steps, stalling once, failing at a given
+time, or sending a wrongly typed output."""
 import sys
 import time
 
@@ -26,6 +27,26 @@ class FailsAt(BeltDrive):
         super().step(t, h)
 
 
+class StallsOnce(BeltDrive):
+    """Takes `stall` seconds over the step at `stall_at`: slow, but its connection stays alive."""
+
+    parameters = {"ramp": 0.5, "stall_at": 1.0, "stall": 1.0}
+
+    def step(self, t, h):
+        if abs(t - self.stall_at) < h / 2:
+            time.sleep(self.stall)
+        super().step(t, h)
+
+
+class SaysOneForTrue(BeltDrive):
+    """Sends an integer where the slot is a bool: the hub names the output and the step."""
+
+    def step(self, t, h):
+        super().step(t, h)
+        self.running = int(self.running)
+
+
 if __name__ == "__main__":
-    kind = {"slow": SlowOnEvenSteps, "fails": FailsAt, "plain": BeltDrive}[sys.argv.pop(1)]
+    kind = {"slow": SlowOnEvenSteps, "fails": FailsAt, "plain": BeltDrive, "ints": SaysOneForTrue,
+            "stalls": StallsOnce}[sys.argv.pop(1)]
     raise SystemExit(serve(kind()))
