@@ -43,6 +43,7 @@ class Simulation:
             self.recorder = _Recorder(columns, run.physics_rate, out, log=self.events)
             self.master = Master(self.plant, self.recorder)
             self.watcher = Watcher(list(self.scenario.expect), self.plant.index, run.physics_rate)
+            self.master.start()   # participants on the bus are launched and awaited here
             self.master.communicate()
             self._observe(self.master.tick)
         except BaseException:
@@ -100,10 +101,14 @@ class Simulation:
 
     def close(self) -> None:
         try:
-            if getattr(self, "recorder", None) is not None:
-                self.recorder.close()
+            if getattr(self, "master", None) is not None:
+                self.master.close()
         finally:
-            self.plant.close()
+            try:
+                if getattr(self, "recorder", None) is not None:
+                    self.recorder.close()
+            finally:
+                self.plant.close()
 
     def __enter__(self):
         return self

@@ -114,3 +114,14 @@ def test_bad_expectations_are_named(write_scenario):
         f"{path}:10: expect[4].slot: object 'gate' (light_barrier) has no slot 'trigger.ocupied' "
         f"(did you mean 'trigger.occupied'?)",
     ]
+
+
+def test_python_api_launches_and_stops_participants(fmus, tmp_path):
+    """The Python API starts what the scenario launches (here: belt-drive logic on the bus)."""
+    reference = tmp_path / "in_process"
+    with Simulation(ROOT / "scenarios" / "belt_ramp_fmu.yaml", out=reference) as sim:
+        sim.run()
+    with Simulation(ROOT / "scenarios" / "belt_ramp_participant.yaml", out=tmp_path / "bus") as sim:
+        assert sim.run_until(lambda s: s["drive.logic.speed"] == 0.5, timeout=3.0)
+        sim.run()
+    assert (reference / "recording.csv").read_bytes() == (tmp_path / "bus" / "recording.csv").read_bytes()
