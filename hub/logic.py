@@ -54,3 +54,14 @@ def fmu_parameters(spec: LogicSpec, value, base: Path, params: dict) -> dict:
         "events": list(spec.events),
         **options,
     }
+
+
+def own_step_problems(params: dict, run) -> list[tuple[tuple, str]]:
+    """A logic component's own `step` must be a whole number of the scenario's communication steps."""
+    if "step" not in params:
+        return []
+    every = params["step"] * run.physics_rate / run.substeps
+    if round(every) < 1 or abs(every - round(every)) > 1e-9 * every:
+        master = run.substeps / run.physics_rate
+        return [(("step",), f"{params['step']} s is not a whole number of communication steps ({master:.6g} s)")]
+    return []

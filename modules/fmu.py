@@ -27,6 +27,7 @@ from hub.component import Component
 from hub.fmu import FmuError, FmuSlave, inspect_fmu
 from hub.fmu_process import IsolatedFmu
 from hub.lockstep import RemoteSlave, RemoteSpec
+from hub.logic import own_step_problems
 from hub.module import Module
 from hub.registry import did_you_mean
 from hub.slots import Slot, SlotType
@@ -160,13 +161,7 @@ class Fmu(Module):
             return [(("file",), f"{fmu.path.name} cannot handle variable communication steps, "
                                 "which run.event_driven needs (canHandleVariableCommunicationStepSize); "
                                 "or give it its own fixed `step`")]
-        if "step" in params:
-            every = params["step"] * run.physics_rate / run.substeps
-            if round(every) < 1 or abs(every - round(every)) > 1e-9 * every:
-                master = run.substeps / run.physics_rate
-                return [(("step",), f"{params['step']} s is not a whole number of communication steps "
-                                    f"({master:.6g} s)")]
-        return []
+        return own_step_problems(params, run)
 
     @classmethod
     def slots(cls, params):

@@ -16,6 +16,7 @@ a void output true fires the event.
 from __future__ import annotations
 
 from hub.lockstep import RemoteSlave, RemoteSpec
+from hub.logic import own_step_problems
 from hub.module import Module
 from hub.slots import Slot, SlotType
 from modules.fmu import FmuLogic
@@ -55,13 +56,7 @@ class ParticipantModule(Module):
 
     @classmethod
     def check_run(cls, params, run):
-        if "step" in params:
-            every = params["step"] * run.physics_rate / run.substeps
-            if round(every) < 1 or abs(every - round(every)) > 1e-9 * every:
-                master = run.substeps / run.physics_rate
-                return [(("step",), f"{params['step']} s is not a whole number of communication steps "
-                                    f"({master:.6g} s)")]
-        return []
+        return own_step_problems(params, run)
 
     @classmethod
     def slots(cls, params):
