@@ -2,11 +2,13 @@
 reaches the sink of its destination, the lanes all deliver, and no bottle tips, falls, speeds
 or passes a closed gate. (Determinism of the engine is covered by the other scenario tests.)"""
 import csv
+import subprocess
+import sys
 
 from hub.scenario import load_scenario
 from modules.source import Source
 
-from .helpers import ROOT, run_scenario
+from .helpers import ROOT
 from .plant_watch import run_watched
 
 SCENARIO = ROOT / "scenarios" / "bottling_plant.yaml"
@@ -45,15 +47,14 @@ def test_bottles_reach_their_destinations_soundly(tmp_path):
         assert int(last[f"{sink}.count.total"]) == int(last[f"{sink}.count.{dest}"]) >= 2
 
 
-def test_storage_lists_destinations_in_the_order_the_clocks_route():
-    scenario = load_scenario(SCENARIO)
-    order = list(destinations(scenario).values())
-    assert order == ["A", "B", "C", "D"] * (len(order) // 4)
-
-
-def test_a_mistimed_switch_misroutes_and_is_caught(tmp_path):
-    # sw1 takes bottle P02 (B) instead of P01 (A): P01 runs on to lane D, P02 turns into lane A.
-    shifted = {"run.duration": 28.0, "objects.sw1_work.start": 20.26, "objects.sw1_base.start": 23.26}
-    scenario, _, _ = run_scenario(SCENARIO, tmp_path, shifted)
-    _, misrouted = deliveries(scenario, tmp_path)
-    assert misrouted == [("P02", "B", "sink_A"), ("P01", "A", "sink_D")]
+def test_a_wrong_routing_participant_misroutes_and_hub_test_names_the_bottles(tmp_path):
+    """The plant-management participant with the lanes of sw1 and sw2 swapped (B, A, C)."""
+    swapped = ["--set", "run.duration=28", "--set", "objects.control.parameters.lanes=B,A,C"]
+    proc = subprocess.run([sys.executable, "-m", "hub", "test", str(SCENARIO), *swapped,
+                           "--out", str(tmp_path)], capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    assert "  ✗ lane A receives only A bottles — failed 1×: at " in proc.stdout
+    assert "it was 'B' (sink_A.bin.object = 'P02')" in proc.stdout
+    assert "it was 'A' (sink_B.bin.object = 'P01')" in proc.stdout
+    _, misrouted = deliveries(load_scenario(SCENARIO), tmp_path)
+    assert sorted(misrouted) == [("P01", "A", "sink_B"), ("P02", "B", "sink_A")]
