@@ -212,141 +212,52 @@ fmi3Status fmi3Reset(fmi3Instance instance)
 
 /* ------------------------------------------------------------ getting and setting values */
 
-fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                          size_t nValueReferences, fmi3Float64 values[], size_t nValues)
-{
-    Status status;
-    size_t i;
+/* Every typed getter and setter has one shape: check the call, then move each value through
+   the variable table (which checks reference, type, phase and range and logs what is wrong). */
+#define FMI3_GETTER(function, fmi_type, get)                                                                  \
+    fmi3Status function(fmi3Instance instance, const fmi3ValueReference valueReferences[],                    \
+                        size_t nValueReferences, fmi_type values[], size_t nValues)                           \
+    {                                                                                                         \
+        Status status;                                                                                        \
+        size_t i;                                                                                             \
+                                                                                                              \
+        if (instance == NULL) {                                                                               \
+            return fmi3Error;                                                                                 \
+        }                                                                                                     \
+        status = begin(instance, __func__, false, nValueReferences, valueReferences, values, nValues);        \
+        for (i = 0; status <= STATUS_WARNING && i < nValueReferences; i++) {                                  \
+            if (get(instance, __func__, valueReferences[i], &values[i]) != STATUS_OK) {                       \
+                status = STATUS_ERROR;                                                                        \
+            }                                                                                                 \
+        }                                                                                                     \
+        return finish(instance, status);                                                                      \
+    }
 
-    if (instance == NULL) {
-        return fmi3Error;
+#define FMI3_SETTER(function, fmi_type, set)                                                                  \
+    fmi3Status function(fmi3Instance instance, const fmi3ValueReference valueReferences[],                    \
+                        size_t nValueReferences, const fmi_type values[], size_t nValues)                     \
+    {                                                                                                         \
+        Status status;                                                                                        \
+        size_t i;                                                                                             \
+                                                                                                              \
+        if (instance == NULL) {                                                                               \
+            return fmi3Error;                                                                                 \
+        }                                                                                                     \
+        status = begin(instance, __func__, true, nValueReferences, valueReferences, values, nValues);         \
+        for (i = 0; status == STATUS_OK && i < nValueReferences; i++) {                                       \
+            status = set(instance, __func__, valueReferences[i], values[i]);                                  \
+        }                                                                                                     \
+        return finish(instance, status);                                                                      \
     }
-    status = begin(instance, __func__, false, nValueReferences, valueReferences, values, nValues);
-    for (i = 0; status <= STATUS_WARNING && i < nValueReferences; i++) {
-        if (variable_get_real(instance, __func__, valueReferences[i], &values[i]) != STATUS_OK) {
-            status = STATUS_ERROR;
-        }
-    }
-    return finish(instance, status);
-}
 
-fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
-                        fmi3Int32 values[], size_t nValues)
-{
-    Status status;
-    size_t i;
-
-    if (instance == NULL) {
-        return fmi3Error;
-    }
-    status = begin(instance, __func__, false, nValueReferences, valueReferences, values, nValues);
-    for (i = 0; status <= STATUS_WARNING && i < nValueReferences; i++) {
-        if (variable_get_int(instance, __func__, valueReferences[i], &values[i]) != STATUS_OK) {
-            status = STATUS_ERROR;
-        }
-    }
-    return finish(instance, status);
-}
-
-fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                          size_t nValueReferences, fmi3Boolean values[], size_t nValues)
-{
-    Status status;
-    size_t i;
-
-    if (instance == NULL) {
-        return fmi3Error;
-    }
-    status = begin(instance, __func__, false, nValueReferences, valueReferences, values, nValues);
-    for (i = 0; status <= STATUS_WARNING && i < nValueReferences; i++) {
-        if (variable_get_bool(instance, __func__, valueReferences[i], &values[i]) != STATUS_OK) {
-            status = STATUS_ERROR;
-        }
-    }
-    return finish(instance, status);
-}
-
-fmi3Status fmi3GetString(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                         size_t nValueReferences, fmi3String values[], size_t nValues)
-{
-    Status status;
-    size_t i;
-
-    if (instance == NULL) {
-        return fmi3Error;
-    }
-    status = begin(instance, __func__, false, nValueReferences, valueReferences, values, nValues);
-    for (i = 0; status <= STATUS_WARNING && i < nValueReferences; i++) {
-        if (variable_get_string(instance, __func__, valueReferences[i], &values[i]) != STATUS_OK) {
-            status = STATUS_ERROR;
-        }
-    }
-    return finish(instance, status);
-}
-
-fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                          size_t nValueReferences, const fmi3Float64 values[], size_t nValues)
-{
-    Status status;
-    size_t i;
-
-    if (instance == NULL) {
-        return fmi3Error;
-    }
-    status = begin(instance, __func__, true, nValueReferences, valueReferences, values, nValues);
-    for (i = 0; status == STATUS_OK && i < nValueReferences; i++) {
-        status = variable_set_real(instance, __func__, valueReferences[i], values[i]);
-    }
-    return finish(instance, status);
-}
-
-fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
-                        const fmi3Int32 values[], size_t nValues)
-{
-    Status status;
-    size_t i;
-
-    if (instance == NULL) {
-        return fmi3Error;
-    }
-    status = begin(instance, __func__, true, nValueReferences, valueReferences, values, nValues);
-    for (i = 0; status == STATUS_OK && i < nValueReferences; i++) {
-        status = variable_set_int(instance, __func__, valueReferences[i], values[i]);
-    }
-    return finish(instance, status);
-}
-
-fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                          size_t nValueReferences, const fmi3Boolean values[], size_t nValues)
-{
-    Status status;
-    size_t i;
-
-    if (instance == NULL) {
-        return fmi3Error;
-    }
-    status = begin(instance, __func__, true, nValueReferences, valueReferences, values, nValues);
-    for (i = 0; status == STATUS_OK && i < nValueReferences; i++) {
-        status = variable_set_bool(instance, __func__, valueReferences[i], values[i]);
-    }
-    return finish(instance, status);
-}
-
-fmi3Status fmi3SetString(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                         size_t nValueReferences, const fmi3String values[], size_t nValues)
-{
-    Status status;
-    size_t i;
-
-    if (instance == NULL) {
-        return fmi3Error;
-    }
-    status = begin(instance, __func__, true, nValueReferences, valueReferences, values, nValues);
-    for (i = 0; status == STATUS_OK && i < nValueReferences; i++) {
-        status = variable_set_string(instance, __func__, valueReferences[i], values[i]);
-    }
-    return finish(instance, status);
-}
+FMI3_GETTER(fmi3GetFloat64, fmi3Float64, variable_get_real)
+FMI3_GETTER(fmi3GetInt32, fmi3Int32, variable_get_int)
+FMI3_GETTER(fmi3GetBoolean, fmi3Boolean, variable_get_bool)
+FMI3_GETTER(fmi3GetString, fmi3String, variable_get_string)
+FMI3_SETTER(fmi3SetFloat64, fmi3Float64, variable_set_real)
+FMI3_SETTER(fmi3SetInt32, fmi3Int32, variable_set_int)
+FMI3_SETTER(fmi3SetBoolean, fmi3Boolean, variable_set_bool)
+FMI3_SETTER(fmi3SetString, fmi3String, variable_set_string)
 
 /* The models have no variables of the remaining types: every reference is
    reported with the type it really has. */
