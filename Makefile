@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
-SCENARIO ?= scenarios/belt_bottle_sensor.yaml
+SCENARIO ?= scenarios/bottling_plant.yaml
 
 .PHONY: run test bench fmus venv clean clean-venv
 

@@ -20,6 +20,11 @@ import zenoh
 
 from .errors import PlanthubError
 from .scenario import BusSettings
+from .tls import TlsSettings
+from .tls import common_name as tls_common_name
+from .tls import problems as tls_problems
+from .tls import refused as tls_refused
+from .yamlsource import format_path
 
 
 class BusError(PlanthubError):
@@ -47,7 +52,7 @@ class Inbox:
     def get(self, timeout: float):
         """The next item, or None when nothing came within `timeout` seconds."""
         try:
-            return self._queue.get(timeout=max(0.0, timeout))
+            return self._queue.get(True, timeout if timeout > 0.0 else 0.0)
         except queue.Empty:
             return None
 
@@ -75,6 +80,45 @@ def local_endpoint(endpoint: str) -> str:
     return re.sub(r"^(tcp|udp|tls|quic)/(0\.0\.0\.0|\[::\])(:\d+)", r"\1/127.0.0.1\3", endpoint)
 
 
+def _configure_tls(config, tls: TlsSettings) -> None:
+    """The `transport/link/tls` part: one certificate serves both directions (listening, and
+    presenting it to a listener that asks, with `mutual`)."""
+    entries = {"root_ca_certificate": tls.ca,
+               "listen_certificate": tls.certificate, "listen_private_key": tls.key,
+               "connect_certificate": tls.certificate if tls.mutual else None,
+               "connect_private_key": tls.key if tls.mutual else None,
+               "enable_mtls": tls.mutual, "verify_name_on_connect": tls.verify_name}
+    for key, value in entries.items():
+        if value is not None:
+            config.insert_json5(f"transport/link/tls/{key}", json.dumps(value))
+
+
+# What every holder of a certificate signed by the authority may do under access control: watch
+# the data plane and the run, ask for rates. The control plane as a whole (serving logic: hello,
+# output, its token; commands) is for the common names listed, and the hub's own.
+_WATCH_KEYS = ["plant/*/**", "plant/*/@cosim/hub", "plant/*/@cosim/state", "plant/*/@cosim/command/result",
+               "plant/*/@cosim/viewer/**"]
+_MESSAGES = ["put", "delete", "declare_subscriber", "query", "declare_queryable", "reply", "liveliness_token",
+             "declare_liveliness_subscriber", "liveliness_query"]
+
+
+def _configure_access(config, control: tuple[str, ...], tls: TlsSettings) -> None:
+    """Zenoh's access control, by certificate common name. A denied message is dropped without a
+    word to its sender; the README says what that looks like."""
+    names = list(control)
+    own = tls_common_name(tls.certificate) if tls.certificate else None
+    if own and own not in names:
+        names.append(own)   # the participants the hub launches present its certificate
+    acl = {"enabled": True, "default_permission": "deny",
+           "rules": [{"id": "watch", "permission": "allow", "messages": _MESSAGES, "key_exprs": _WATCH_KEYS},
+                     {"id": "control", "permission": "allow", "messages": _MESSAGES,
+                      "key_exprs": ["plant/*/@cosim/**"]}],
+           "subjects": [{"id": "anyone"}] + ([{"id": "controllers", "cert_common_names": names}] if names else []),
+           "policies": [{"rules": ["watch"], "subjects": ["anyone"]}] +
+                       ([{"rules": ["control"], "subjects": ["controllers"]}] if names else [])}
+    config.insert_json5("access_control", json.dumps(acl))
+
+
 def _cause(exc: Exception) -> str:
     # Zenoh's messages end with the Rust source location, which helps nobody here.
     return re.sub(r"\s+at /\S+\.rs:\d+\.?", "", str(exc)).strip()
@@ -83,17 +127,25 @@ def _cause(exc: Exception) -> str:
 class Bus:
     """One Zenoh session, opened from `BusSettings`.
 
-    A session in peer or router mode with no listen endpoint listens on a free loopback port, so
-    a plain run reaches nothing beyond this machine; `endpoints` tells where others connect.
+    A session in peer or router mode with no listen endpoint listens on a free loopback port (tls/
+    with a certificate in `settings.tls`), so a plain run reaches nothing beyond this machine;
+    `endpoints` tells where others connect. TLS and access control: hub/tls.py, README.
     Gossip and multicast scouting stay off unless `scouting` is on: participants reach the hub
     at its endpoints, never each other.
     """
 
     def __init__(self, settings: BusSettings, *, listen: bool = True):
         self.settings = settings
+        tls = settings.tls
+        listening = listen and settings.mode != "client"
+        wrong = tls_problems(tls, settings.listen, settings.connect, listening=listening, control=settings.control)
+        if wrong:
+            raise BusError("cannot open the bus: " + "; ".join(
+                f"{format_path(('run', 'bus') + place)}: {message}" for place, message in wrong))
         listen_on = list(settings.listen)
-        if listen and not listen_on and settings.mode != "client":
-            listen_on = [free_loopback_endpoint()]
+        if listening and not listen_on:
+            free = free_loopback_endpoint()
+            listen_on = [free.replace("tcp/", "tls/", 1) if tls and tls.certificate else free]
         self.endpoints = tuple(listen_on)
         config = zenoh.Config()
         try:
@@ -105,14 +157,37 @@ class Bus:
             # Zenoh's lease is how long the *other* side waits for our keep-alives: it bounds
             # how soon a frozen process is declared gone.
             config.insert_json5("transport/link/tx/lease", str(max(1, round(settings.lease * 1000))))
+            if tls is not None:
+                _configure_tls(config, tls)
+            if settings.control is not None:
+                _configure_access(config, settings.control, tls)
             self._session = zenoh.open(config)
         except zenoh.ZError as exc:
             where = ", ".join([f"listen on {e}" for e in listen_on] + [f"connect to {e}" for e in settings.connect])
             raise BusError(f"cannot open the bus ({settings.mode}{'; ' + where if where else ''}): "
-                           f"{_cause(exc)}") from None
+                           f"{_cause(exc)}{self._refusals(settings)}") from None
+        if tls is not None and settings.connect and not self._connected():
+            # A refused handshake only shows in Zenoh's log, and the session would keep trying
+            # until its owner's join timeout: ask once why, and stop with the answer at once.
+            # (Nothing listening there yet is no refusal: the hub may still be starting.)
+            refusals = self._refusals(settings)
+            if refusals:
+                self._session.close()
+                raise BusError(f"cannot join over TLS{refusals}")
         self._entities: list = []
         self._lock = threading.Lock()
         _open.add(self)
+
+    @staticmethod
+    def _refusals(settings: BusSettings) -> str:
+        if settings.tls is None:
+            return ""
+        found = [(e, tls_refused(e, settings.tls)) for e in settings.connect]
+        return "".join(f"; {e} refused the handshake: {why}" for e, why in found if why)
+
+    def _connected(self) -> bool:
+        info = self._session.info
+        return bool(list(info.peers_zid()) or list(info.routers_zid()))
 
     # --- publishing --------------------------------------------------------------------
     def publisher(self, key: str, encoding: str, *, lossy: bool = False, express: bool = True) -> "Publisher":

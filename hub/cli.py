@@ -12,8 +12,10 @@ from .cli_bus import add_commands as add_bus_commands, add_run_options, bus_sett
 from .errors import PlanthubError, Problem, ScenarioError
 from .master import Master
 from .plant import Plant
+from .plant_summary import PlantTally
 from .recorder import Recorder
 from .registry import UnknownModule, default_registry
+from .run_summary import RunSummary
 from .scenario import Scenario, load_scenario
 
 
@@ -132,15 +134,22 @@ def _run(args) -> int:
             commands = Commands(plant, recorder, replay) if replay is not None else None
             pacer = Pacer(scenario.run.physics_rate, args.realtime) if args.realtime else None
             master = Master(plant, recorder, bus=bus, commands=commands, pacer=pacer, log=notice)
+            tally = PlantTally.for_plant(plant)
+            if tally is not None:
+                tally.observe(plant.world.tick)   # the first look, where Simulation takes it too
             try:
-                result = master.run(progress=_Progress() if sys.stderr.isatty() else None)
+                result = master.run(progress=_at_points(tally, _Progress() if sys.stderr.isatty() else None))
             finally:
                 master.close()
                 recorder.close()
+            summary = RunSummary(scenario.name, scenario.path, result.ticks, result.rate, scenario.run.substeps,
+                                 result.wall_seconds, recorder.stats, len(scenario.record), out,
+                                 tally.summary() if tally is not None else None)
     finally:
         if bus is not None:
             bus.close()
-    _summary(scenario, result, recorder, out)
+    summary.write(out / "summary.json")
+    print("\n".join(summary.lines()))
     if result.stopped_by:
         print(f"  stopped      {result.stopped_by}")
     if pacer is not None:
@@ -152,6 +161,19 @@ def _run(args) -> int:
     if (out / "commands.csv").is_file():
         print(f"  commands     {out / 'commands.csv'}")
     return 0
+
+
+def _at_points(tally: PlantTally | None, progress):
+    """What runs at every communication point: the plant's jam watch, the progress display."""
+    if tally is None:
+        return progress
+    if progress is None:
+        return lambda tick, end: tally.observe(tick)
+
+    def both(tick: int, end: int) -> None:
+        tally.observe(tick)
+        progress(tick, end)
+    return both
 
 
 class _Progress:
@@ -167,22 +189,6 @@ class _Progress:
             print(f"\r  {100 * tick / end:5.1f} %  {now - self.started:6.1f} s wall", end="", file=sys.stderr)
             if tick >= end:
                 print(file=sys.stderr)
-
-
-def _summary(scenario: Scenario, result, recorder: Recorder, out: Path) -> None:
-    run = scenario.run
-    print(f"planthub run {scenario.name}  ({scenario.path})")
-    print(f"  simulated    {result.sim_seconds:.3f} s  ({result.ticks} ticks at {run.physics_rate} Hz, "
-          f"communication step {1000 * run.substeps / run.physics_rate:.4g} ms)")
-    print(f"  wall time    {result.wall_seconds:.3f} s  (real-time factor {result.realtime_factor:.1f}×)")
-    total = sum(s.count for s in recorder.stats.values())
-    print(f"  events       {total}")
-    width = max((len(k) for k in recorder.stats), default=0)
-    for slot, stats in recorder.stats.items():
-        detail = f"  ({stats.first_detail})" if stats.first_detail else ""
-        print(f"    {slot:<{width}}  {stats.count:>4}×  first at {stats.first_tick / run.physics_rate:.4f} s{detail}")
-    print(f"  recording    {out / 'recording.csv'}  ({len(scenario.record)} slots)")
-    print(f"  event log    {out / 'events.csv'}")
 
 
 def _describe(args) -> int:

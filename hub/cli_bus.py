@@ -26,7 +26,7 @@ def add_run_options(run: argparse.ArgumentParser) -> None:
 
 def add_commands(sub) -> dict:
     """The bus subcommands; returns name → handler."""
-    from .participant import add_options
+    from .participant import add_options, add_tls_options
 
     serve = sub.add_parser("serve-fmu", help="serve an FMU to a running plant over the bus (a lockstep participant)")
     serve.add_argument("fmu", type=Path)
@@ -44,7 +44,8 @@ def add_commands(sub) -> dict:
     send.add_argument("--connect", action="append", required=True, metavar="ENDPOINT", help="the hub's endpoint")
     send.add_argument("--by", default="", help="who sends it (logged with the command)")
     send.add_argument("--timeout", type=float, default=5.0, help="s to wait for the hub's answer")
-    return {"serve-fmu": lambda args: _serve_fmu(serve, args), "send": _send}
+    add_tls_options(send)
+    return {"serve-fmu": lambda args: _serve_fmu(serve, args), "send": lambda args: _send(send, args)}
 
 
 def bus_settings(args, scenario: Scenario) -> BusSettings | None:
@@ -83,17 +84,19 @@ def _serve_fmu(parser, args) -> int:
     return serve(logic, args=args)
 
 
-def _send(args) -> int:
+def _send(parser, args) -> int:
     import yaml
 
     from .bus import Bus, Inbox
     from .commands import command_message
+    from .participant import tls_settings
     from . import wire
 
+    tls = tls_settings(parser, args)
     value = yaml.safe_load(args.value) if args.value is not None else None
     ident = uuid.uuid4().hex
     inbox = Inbox()
-    with Bus(BusSettings(connect=tuple(args.connect)), listen=False) as bus:
+    with Bus(BusSettings(connect=tuple(args.connect), tls=tls), listen=False) as bus:
         bus.watch_tokens(wire.hub_token(args.run), lambda m: inbox.put(("hub", m.alive)))
         bus.subscribe(wire.control_key(args.run, "command", "result"), lambda m: inbox.put(("result", m.payload)))
         deadline = time.monotonic() + args.timeout

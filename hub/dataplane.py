@@ -7,8 +7,11 @@ slot nothing else reads is computed only while it is watched. A viewer asks for 
 `{"key": KEYEXPR, "period": SECONDS}` on `plant/<run>/@cosim/viewer/<id>/rate`, holding the
 liveliness token `plant/<run>/@cosim/viewer/<id>`; a slot goes out at the fastest rate asked for
 a key expression that covers it (`run.bus.publish_period` where none does; a void slot at every
-point it fires), and a viewer's requests end with its token. A sample's payload is the raw value (schemas/wire.md), its
-attachment the tick of its communication point (uint64, little-endian).
+point it fires), and a viewer's requests end with its token. With `run.bus.publish: change` a slot
+goes out at such a point only if its value differs from the last sample sent (byte for byte, as
+encoded), so a value that holds costs nothing; its current value still goes out when its first
+subscriber comes and when a viewer asks for a rate that covers it. A sample's payload is the raw
+value (schemas/wire.md), its attachment the tick of its communication point (uint64, little-endian).
 """
 from __future__ import annotations
 
@@ -22,7 +25,7 @@ from . import wire
 
 
 class _Exposed:
-    __slots__ = ("ref", "key", "index", "void", "pack", "put", "publisher", "component", "period", "due")
+    __slots__ = ("ref", "key", "index", "void", "pack", "put", "publisher", "component", "period", "due", "last")
 
     def __init__(self, ref, key, index, kind, publisher, component):
         self.ref, self.key, self.index = ref, key, index
@@ -32,12 +35,14 @@ class _Exposed:
         self.component = component      # the component that writes it (a source), else None
         self.period = 1
         self.due = 0
+        self.last = None                # payload of the last sample sent (publish: change); None: send the next
 
 
 class DataPlane:
     def __init__(self, bus: Bus, run: str, plant, settings: BusSettings):
         self.rate = plant.scenario.run.physics_rate
         self.default_period = max(1, round(settings.publish_period * self.rate))
+        self.on_change = settings.publish == "change"
         self.inbox = inbox = Inbox()
         self.samples = 0
         self.requests: dict[str, dict[str, int]] = {}    # viewer id → {key expression: period in ticks}
@@ -67,7 +72,7 @@ class DataPlane:
             self.update()
         if not self.live:
             return
-        values, fired = signals.values, signals.fired
+        values, fired, on_change = signals.values, signals.fired, self.on_change
         attachment = wire.TICK.pack(tick)
         for e in self.live:
             if e.void:   # an event is sent whenever it fires: a slower rate must not lose it
@@ -78,6 +83,10 @@ class DataPlane:
                 continue
             else:
                 payload = e.pack(values[e.index])
+                if on_change:
+                    if payload == e.last:
+                        continue   # still due: a change goes out at the first point it shows
+                    e.last = payload
             e.put(payload, attachment=attachment)
             e.due = tick + e.period
             self.samples += 1
@@ -85,11 +94,12 @@ class DataPlane:
     def update(self) -> None:
         """Take in subscribers that came or went and rate requests (between two points only)."""
         rates_changed = needs_changed = False
+        asked_now = []   # key expressions of this update's rate requests: their slots go out afresh
         for kind, *rest in self.inbox.drain():
             if kind == "match":
                 entry, matching = rest
                 if matching and entry not in self.live:
-                    entry.due = 0
+                    entry.due, entry.last = 0, None
                     self.live.append(entry)
                 elif not matching and entry in self.live:
                     self.live.remove(entry)
@@ -109,6 +119,7 @@ class DataPlane:
                     asked[key] = max(1, round(period * self.rate))
                 else:
                     asked.pop(key, None)
+                asked_now.append(key)
                 rates_changed = True
             elif kind == "viewer":
                 message = rest[0]
@@ -119,6 +130,8 @@ class DataPlane:
             for e in self.exposed:
                 periods = [p for k, p in asked if key_intersects(k, e.key)]
                 e.period = min(periods) if periods else self.default_period
+                if self.on_change and any(key_intersects(k, e.key) for k in asked_now):
+                    e.due, e.last = 0, None   # a viewer that asks gets the current values at the next point
         if needs_changed:
             self._refresh_needed()
 

@@ -25,7 +25,11 @@ class Launched:
                 self.process = subprocess.Popen(
                     self.command, cwd=cwd, env={**os.environ, **env}, stdin=subprocess.DEVNULL,
                     stdout=out, stderr=subprocess.STDOUT,
-                    start_new_session=True)   # a Ctrl-C at the hub's terminal is the hub's to handle
+                    # Its own process group, so a Ctrl-C at the hub's terminal is the hub's to handle;
+                    # but the hub's session: with autogroup scheduling (Linux) a new session would make
+                    # it a scheduling group of its own, and a lockstep round trip then waits longer
+                    # for the CPU at every hand-over between the hub and its participants.
+                    process_group=0)
         except OSError as exc:
             self.log.unlink(missing_ok=True)
             raise SimulationError(f"participant {name!r}: cannot start {' '.join(command)!r}: "

@@ -27,10 +27,10 @@ class Viewer:
     """Watches slots by key expression and sends commands. Its liveliness token ends its rate
     requests when it goes; samples it does not fetch in time are dropped by the hub, not queued."""
 
-    def __init__(self, run: str, connect, *, mode: str = "peer", name: str | None = None):
+    def __init__(self, run: str, connect, *, mode: str = "peer", name: str | None = None, tls=None):
         self.run = wire.check_run_name(run)
         self.id = name or uuid.uuid4().hex
-        self.bus = Bus(BusSettings(mode=mode, connect=tuple(connect)), listen=False)
+        self.bus = Bus(BusSettings(mode=mode, connect=tuple(connect), tls=tls), listen=False)   # tls: hub.tls.TlsSettings
         self._samples, self._control = Inbox(), Inbox()
         self.hub_alive = False
         self.state: dict = {}

@@ -17,6 +17,7 @@ from .errors import SimulationError
 from .launcher import Launched
 from .registry import did_you_mean
 from .slots import SlotType
+from .tls import environment as tls_environment
 from . import wire
 
 
@@ -51,6 +52,7 @@ class RemoteSlave:
         self.rate = rate
         self.instance = spec.name
         self.link: Lockstep | None = None
+        self.peer: _Peer | None = None   # its state in the link, set when the link starts
         self.sent = 0            # step messages sent; the next step's number
         self._inputs = None
 
@@ -59,7 +61,8 @@ class RemoteSlave:
 
     def step(self, t: float, h: float) -> None:
         # FmuLogic passes t = tick / rate and h = ticks / rate: rounding recovers the integers exactly.
-        self._require().send_step(self, round(t * self.rate), round(h * self.rate), t, h, self._inputs)
+        rate = self.rate
+        self._require().send_step(self, round(t * rate), round(h * rate), t, h, self._inputs)
 
     def outputs(self) -> list:
         return self._require().collect(self)
@@ -86,6 +89,8 @@ class _Peer:
     in_order: list | None = None       # wire position → scenario input index (None: the same order)
     out_order: list = field(default_factory=list)   # scenario output index → wire position
     readers: list = field(default_factory=list)     # per scenario output: wire value → slot value
+    wire_types: tuple | None = None    # the Python types of outputs that need no conversion, in wire order
+    in_scenario_order: bool = True     # its outputs come in the scenario's order
     result_n: int | None = None
     result: list | None = None
     pending: bytes | None = None       # the last step message, re-sent to a participant that rejoins
@@ -114,6 +119,8 @@ class Lockstep:
         self.log = log
         self.warn = warn
         self.peers = {s.spec.name: _Peer(s) for s in slaves}
+        for peer in self.peers.values():
+            peer.slave.peer = peer
         self.inbox = Inbox()
         self.tick = 0
         self._closing = False
@@ -128,7 +135,7 @@ class Lockstep:
         bus.watch_tokens(wire.logic_key(run, "*"), lambda m: inbox.put(("token", m)))
         for name, peer in self.peers.items():
             bus.subscribe_payloads(wire.logic_key(run, name, "output"),
-                                   lambda payload, name=name: inbox.put(("output", name, payload)))
+                                   lambda payload, peer=peer: inbox.put(("output", peer, payload)))
             peer.step_pub = bus.publisher(wire.logic_key(run, name, "step"), wire.MSGPACK)
             peer.welcome_pub = bus.publisher(wire.logic_key(run, name, "welcome"), wire.MSGPACK)
         self.publish_state("waiting" if self.peers else "running")
@@ -148,7 +155,8 @@ class Lockstep:
         mode = "peer" if self.bus.settings.mode == "peer" else "client"
         env = {"PLANTHUB_RUN": self.run, "PLANTHUB_NAME": spec.name, "PLANTHUB_CONNECT": ",".join(connect),
                "PLANTHUB_MODE": mode, "PLANTHUB_LEASE": repr(self.lease),
-               "PLANTHUB_JOIN_TIMEOUT": repr(spec.join_timeout)}
+               "PLANTHUB_JOIN_TIMEOUT": repr(spec.join_timeout),
+               **tls_environment(self.bus.settings.tls, loopback=not self.bus.settings.connect)}
         return Launched(spec.name, list(spec.command), spec.cwd, env)
 
     def _wait_ready(self, peers: list[_Peer], verb: str, done=lambda peer: peer.ready) -> None:
@@ -195,20 +203,21 @@ class Lockstep:
 
     # --- stepping -------------------------------------------------------------------------
     def send_step(self, slave: RemoteSlave, tick: int, ticks: int, t: float, h: float, values: list) -> None:
-        peer = self.peers[slave.spec.name]
-        wired = values if peer.in_order is None else [values[i] for i in peer.in_order]
-        peer.pending = wire.step_message(slave.sent, tick, ticks, t, h, wired)
+        peer = slave.peer
+        if peer.in_order is not None:
+            values = [values[i] for i in peer.in_order]
+        peer.pending = message = wire.step_message(slave.sent, tick, ticks, t, h, values)
         slave.sent += 1
         peer.from_tick = tick
         self.tick = tick + ticks   # the point at which the run now waits for the answers
         peer.sent_at = time.monotonic()
-        peer.step_pub.put(peer.pending)
+        peer.step_pub.put(message)
 
     def collect(self, slave: RemoteSlave) -> list:
         """The outputs of the last step sent to `slave` (before any step: its initial outputs)."""
-        peer = self.peers[slave.spec.name]
+        peer = slave.peer
         want = slave.sent - 1
-        while peer.result_n != want:
+        while peer.result_n != want:   # outputs that came meanwhile were filed already (poll, other collects)
             item = self.inbox.get(peer.sent_at + self.lease - time.monotonic())
             if item is not None:
                 self._dispatch(item)
@@ -247,7 +256,7 @@ class Lockstep:
         deadline, others = time.monotonic() + 0.05, []
         try:
             while (item := self.inbox.get(deadline - time.monotonic())) is not None:
-                if item[0] == "output" and item[1] == peer.name:
+                if item[0] == "output" and item[1] is peer:
                     self._dispatch(item)
                 else:
                     others.append(item)
@@ -265,10 +274,18 @@ class Lockstep:
         return ("left the bus: its liveliness token went away (its process ended, froze longer than "
                 "its lease, or lost its connection)")
 
-    def _output(self, name: str, payload: bytes) -> None:
-        peer = self.peers[name]
+    def _output(self, peer: _Peer, payload: bytes) -> None:
         try:
             message = wire.unpack(payload)
+            # The common case, decided with a few type tests: the answer to the step the hub waits
+            # for, every value already of its slot's type (what the readers below would return).
+            if type(message) is list and len(message) == 2:
+                n, values = message
+                if (type(n) is int and n == peer.slave.sent - 1 and n >= 0 and type(values) is list
+                        and tuple(map(type, values)) == peer.wire_types):
+                    peer.result = values if peer.in_scenario_order else [values[j] for j in peer.out_order]
+                    peer.result_n = n
+                    return
             if isinstance(message, dict) and "error" in message:
                 self._fail(peer, f"failed in step {message.get('step')}: {message['error']}")
             if not (isinstance(message, list) and len(message) == 2 and isinstance(message[0], int)
@@ -337,6 +354,8 @@ class Lockstep:
         peer.in_order = None if in_order == sorted(in_order) else in_order
         peer.out_order = [out_names.index(n) for n, _ in spec.outputs]
         peer.readers = [wire.reader(kind) for _, kind in spec.outputs]
+        peer.wire_types = wire.python_types([kind for _, kind in outputs])
+        peer.in_scenario_order = peer.out_order == list(range(len(outputs)))
         peer.id, peer.welcomed, peer.ready, peer.lost = ident, True, False, False
         peer.sent_at = time.monotonic()
         self._welcome(name, ident)

@@ -163,7 +163,7 @@ class Master:
         self.lockstep.start(self.world.tick)
 
     def _notice(self, text: str) -> None:
-        self.recorder.event(self.world.tick, "@bus", text)
+        self.recorder.notice(self.world.tick, text)
         self.log(text)
 
     def run(self, until_tick: int | None = None, progress=None) -> RunResult:

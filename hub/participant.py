@@ -13,7 +13,7 @@
 
 Inputs, outputs and parameters are attributes: the hub's values are set before every `step`,
 the outputs read after it. Where to connect comes from the command line (`--run`, `--name`,
-`--connect`, `--mode`, `--lease`) or, for a process the hub launched, from its environment.
+`--connect`, `--mode`, `--lease`, `--tls-*`) or, for a process the hub launched, from its environment.
 """
 from __future__ import annotations
 
@@ -28,6 +28,8 @@ from typing import ClassVar
 from .bus import Bus, Inbox
 from .errors import PlanthubError
 from .scenario import BusSettings
+from .tls import TlsSettings
+from .tls import problems as tls_problems
 from .slots import SlotType
 from . import wire
 
@@ -75,6 +77,12 @@ class Participant:
             raise PlanthubError(f"{type(self).__name__}: " + "; ".join(problems))
         self._in, self._out = pairs
         self._readers = [(name, wire.reader(kind)) for name, kind in self._in]
+        # The hot path of `advance` and `current_outputs`: names once, and the msgpack types of
+        # inputs that arrive ready to use (so no reader needs to run).
+        self._in_names = tuple(name for name, _ in self._in)
+        self._in_types = wire.python_types(kind for _, kind in self._in)
+        self._out_names = tuple(name for name, _ in self._out)
+        self._events_out = tuple(name for name, kind in self._out if kind is SlotType.VOID)
         return pairs[0], pairs[1]
 
     def begin(self, parameters: dict, time: float) -> None:
@@ -86,21 +94,24 @@ class Participant:
         self.start()
 
     def advance(self, t: float, h: float, values: list) -> list:
-        try:
-            for (name, read), value in zip(self._readers, values):
-                setattr(self, name, read(value))
-        except wire.WireError:
-            for (name, kind), value in zip(self._in, values):   # again, to name the input
-                wire.from_wire(kind, value, f"input {name!r}")
-            raise
+        if tuple(map(type, values)) == self._in_types:   # each value as its slot wants it
+            for name, value in zip(self._in_names, values):
+                setattr(self, name, value)
+        else:
+            try:
+                for (name, read), value in zip(self._readers, values):
+                    setattr(self, name, read(value))
+            except wire.WireError:
+                for (name, kind), value in zip(self._in, values):   # again, to name the input
+                    wire.from_wire(kind, value, f"input {name!r}")
+                raise
         self.step(t, h)
         return self.current_outputs()
 
     def current_outputs(self) -> list:
-        out = [getattr(self, name) for name, _ in self._out]
-        for name, kind in self._out:
-            if kind is SlotType.VOID:
-                setattr(self, name, False)   # an event fires once
+        out = [getattr(self, name) for name in self._out_names]
+        for name in self._events_out:
+            setattr(self, name, False)   # an event fires once
         return out
 
 
@@ -117,6 +128,41 @@ def add_options(parser: argparse.ArgumentParser) -> None:
                         help="s after which the hub declares this process frozen")
     parser.add_argument("--join-timeout", type=float, default=float(env("PLANTHUB_JOIN_TIMEOUT", "30")),
                         help="s to wait for the hub (and for it to come back after a lost connection)")
+    add_tls_options(parser)
+
+
+def add_tls_options(parser: argparse.ArgumentParser) -> None:
+    """Certificates for tls/ endpoints (a hub that launches the process puts its own in the environment)."""
+    env = os.environ.get
+    tls = parser.add_argument_group("TLS (for tls/ endpoints)")
+    tls.add_argument("--tls-ca", default=env("PLANTHUB_TLS_CA"), metavar="PEM",
+                     help="the authority that signed the hub's certificate")
+    tls.add_argument("--tls-cert", default=env("PLANTHUB_TLS_CERT"), metavar="PEM",
+                     help="this process's certificate, for a hub that asks for one (mutual TLS)")
+    tls.add_argument("--tls-key", default=env("PLANTHUB_TLS_KEY"), metavar="PEM", help="the private key of --tls-cert")
+    tls.add_argument("--tls-no-verify-name", action="store_true", default=env("PLANTHUB_TLS_VERIFY_NAME") == "0",
+                     help="accept a hub certificate that does not name the endpoint's host (it is still "
+                          "checked against --tls-ca)")
+
+
+_TLS_OPTIONS = {"ca": "--tls-ca", "certificate": "--tls-cert", "key": "--tls-key", "tls": "--tls-*"}
+
+
+def tls_settings(parser: argparse.ArgumentParser, args: argparse.Namespace) -> TlsSettings | None:
+    """The TLS settings the options give (None: none given); a bad set-up is a usage error."""
+    tls = None
+    if args.tls_ca or args.tls_cert or args.tls_key:
+        tls = TlsSettings(args.tls_ca, args.tls_cert, args.tls_key, mutual=bool(args.tls_cert),
+                          verify_name=not args.tls_no_verify_name)
+    wrong = []
+    for place, message in tls_problems(tls, (), args.connect, listening=False):
+        if place[0] == "connect":
+            endpoint = args.connect[place[1]]
+            message = f"{endpoint} is a TLS endpoint: give --tls-ca, the authority that signed the hub's certificate"
+        wrong.append(f"{_TLS_OPTIONS.get(place[-1], '--connect')}: {message}")
+    if wrong:
+        parser.error("; ".join(wrong))
+    return tls
 
 
 def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> argparse.Namespace:
@@ -125,6 +171,7 @@ def check_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> 
     missing = [o for o in ("run", "name") if not getattr(args, o)]
     if missing:
         parser.error(f"give {' and '.join('--' + o for o in missing)} (or start me from a scenario)")
+    args.tls = tls_settings(parser, args)
     return args
 
 
@@ -153,16 +200,18 @@ class _Link:
         self.inputs, self.outputs = logic.interface()
         self.id = uuid.uuid4().hex
         self.inbox = Inbox()
-        settings = BusSettings(mode=args.mode, connect=tuple(args.connect), lease=args.lease)
+        settings = BusSettings(mode=args.mode, connect=tuple(args.connect), lease=args.lease,
+                               tls=getattr(args, "tls", None))
         self.bus = Bus(settings, listen=False)
         self.hub_alive = False
+        self.lost_at = None       # when the hub's token went away, while it is away
         self.last = None          # (step number, output message) of the last step served
 
     def __enter__(self):
         bus, inbox, key = self.bus, self.inbox, lambda *p: wire.logic_key(self.run, self.name, *p)
         try:
             bus.subscribe_payloads(key("welcome"), lambda p: inbox.put(("welcome", p)))
-            bus.subscribe_payloads(key("step"), lambda p: inbox.put(("step", p)))
+            bus.subscribe_payloads(key("step"), inbox.put)   # a step is the bare payload: see serve
             bus.subscribe_payloads(wire.control_key(self.run, "state"), lambda p: inbox.put(("state", p)))
             bus.watch_tokens(wire.hub_token(self.run), lambda m: inbox.put(("hub", m.alive)))
             self.output = bus.publisher(key("output"), wire.MSGPACK)
@@ -181,37 +230,41 @@ class _Link:
 
     def serve(self) -> int:
         self._join()
+        # Steps arrive as bare payloads (bytes), everything else as (kind, value): the loop a step
+        # takes is kept short, as it runs at every communication point of the run.
+        take, step = self.inbox.get, self._step
         while True:
-            item = self._next(self.args.join_timeout)
-            kind = item[0]
-            if kind == "step":
-                self._step(item[1])
-            elif kind == "stopped":
+            item = take(1.0)
+            if type(item) is bytes:
+                step(item)
+                if self.lost_at is not None:
+                    self.lost_at = time.monotonic()   # its token went, yet it steps us: give it time
+                continue
+            news = self._news(item)
+            if news == "stopped":
                 return 0
-            elif kind == "rejoin":
+            if news == "rejoin":
                 self._join()
 
-    def _next(self, hub_grace: float):
-        """The next step, or ("stopped",) / ("rejoin",); the hub's absence is bounded by `hub_grace`."""
-        lost_at = None if self.hub_alive else time.monotonic()
-        while True:
-            item = self.inbox.get(1.0)
-            if item is None:
-                if lost_at is not None and time.monotonic() - lost_at > hub_grace:
-                    raise PlanthubError(f"the hub of run {self.run!r} went away and did not come back "
-                                        f"within {hub_grace:g} s")
-                continue
-            kind, value = item
-            if kind == "step":
-                return item
-            if kind == "state" and wire.unpack(value).get("state") == "stopped":
-                return ("stopped",)
-            if kind == "hub":
-                self.hub_alive = value
-                if value and lost_at is not None:
-                    return ("rejoin",)   # it came back (a broken connection healed): say hello again
-                if not value:
-                    lost_at = time.monotonic()
+    def _news(self, item) -> str | None:
+        """What a message other than a step means: "stopped", "rejoin" or None (also for nothing
+        within a second); the hub's absence is bounded by the join timeout."""
+        if item is None:
+            grace = self.args.join_timeout
+            if self.lost_at is not None and time.monotonic() - self.lost_at > grace:
+                raise PlanthubError(f"the hub of run {self.run!r} went away and did not come back "
+                                    f"within {grace:g} s")
+            return None
+        kind, value = item
+        if kind == "state" and wire.unpack(value).get("state") == "stopped":
+            return "stopped"
+        if kind == "hub":
+            self.hub_alive = value
+            if value and self.lost_at is not None:
+                return "rejoin"   # it came back (a broken connection healed): say hello again
+            if not value:
+                self.lost_at = time.monotonic()
+        return None
 
     def _join(self) -> None:
         """Wait for the hub, say hello until welcomed, start the logic, send the initial outputs."""
@@ -230,8 +283,8 @@ class _Link:
                 self.hello.put(hello)   # repeated: the hub may not have been listening yet
                 sent_at = now
             item = self.inbox.get(0.1)
-            if item is None:
-                continue
+            if item is None or type(item) is bytes:
+                continue   # a step before the welcome: the hub sends it again once we are back
             kind, value = item
             if kind == "hub":
                 self.hub_alive, sent_at = value, None
@@ -248,6 +301,7 @@ class _Link:
             self.logic.begin(dict(welcome.get("parameters") or {}), float(welcome.get("time", 0.0)))
         self.output.put(wire.output_message(-1, self.logic.current_outputs() if self.last is None
                                             else wire.unpack(self.last[1])[1]))
+        self.lost_at = None if self.hub_alive else time.monotonic()
 
     def _step(self, payload: bytes) -> None:
         n, _tick, _ticks, t, h, values = wire.read_step(payload)

@@ -40,6 +40,10 @@ class Recorder:
     events.csv: `time,tick,slot,detail`, one row per event in order of the physics tick.
     commands.csv (from the first operator command on): `time,tick,op,slot,value,by`, the value
     as JSON — what `planthub run --replay` applies again at the same ticks.
+    bus_log.csv (from the first notice on): `time,tick,detail`, what happened to the run on the
+    bus (a pause for a lost participant, the resumption). It is kept apart from events.csv, which
+    holds only what the plant did: a pause depends on the wall clock and the network, so no
+    re-run reproduces it, while events.csv and recording.csv of a replay equal the original's.
     """
 
     columns: list[tuple[SlotRef, SlotType, int]]   # (slot, type, index in the plant's Signals)
@@ -49,7 +53,7 @@ class Recorder:
 
     def __post_init__(self):
         self._files = []
-        self._rows = self._events = self._commands = None
+        self._rows = self._events = self._commands = self._notices = None
         if self.directory is not None:
             self.directory.mkdir(parents=True, exist_ok=True)
             self._rows = self._open("recording.csv")
@@ -89,6 +93,14 @@ class Recorder:
             self._commands = self._open("commands.csv")
             self._commands.writerow(["time", "tick", "op", "slot", "value", "by"])
         self._commands.writerow([repr(tick / self.rate), tick, op, slot, value, by])
+
+    def notice(self, tick: int, detail: str) -> None:
+        if self.directory is None:
+            return
+        if self._notices is None:
+            self._notices = self._open("bus_log.csv")
+            self._notices.writerow(["time", "tick", "detail"])
+        self._notices.writerow([repr(tick / self.rate), tick, detail])
 
     def close(self) -> None:
         for handle in self._files:

@@ -18,6 +18,8 @@ from .logic import fmu_parameters
 from .module import Module
 from .registry import Registry, UnknownModule, default_registry, did_you_mean
 from .slots import Direction, Slot, SlotRef, SlotType
+from .tls import TlsSettings
+from .tls import problems as tls_problems
 from .yamlsource import Lines, format_path, line_of, load_yaml
 
 SCHEMAS = Path(__file__).resolve().parent.parent / "schemas"
@@ -48,6 +50,10 @@ class BusSettings:
     on_loss: str = "stop"                # stop | pause: what a lost participant does to the run
     publish_period: float = 0.0          # s between data-plane samples nobody asked a rate for
     expose: tuple[str, ...] = ("*",)     # slots on the data plane: patterns of object.component.slot
+    tls: TlsSettings | None = None       # certificates for tls/ endpoints (hub/tls.py)
+    control: tuple[str, ...] | None = None   # access control: the certificate common names that may
+                                             # act on the control plane; None: whoever joins may
+    publish: str = "every"               # every | change: a data-plane slot goes out at each due point, or when changed
 
 
 @dataclass(frozen=True)
@@ -58,6 +64,7 @@ class RunSettings:
     seed: int
     event_driven: bool = False   # a trigger event ends the communication step at its tick
     master: str = "jacobi"       # or "gauss-seidel": how logic components step (hub/gauss_seidel.py)
+    jam_after: float = 5.0       # s a bottle stands still on a running belt, not held at a gate, to be jammed (hub/jams.py)
     bus: BusSettings | None = None   # None: no `run.bus` section
 
     @property
@@ -138,19 +145,31 @@ def _resolve_paths(params: dict, schema: dict, base: Path) -> dict:
     return out
 
 
-def _bus_settings(bus: dict) -> BusSettings:
-    """The `run.bus` section (already checked by the schema) with defaults filled in."""
+def _bus_settings(bus: dict, base: Path) -> BusSettings:
+    """The `run.bus` section (already checked by the schema) with defaults filled in; the TLS
+    files are relative to the scenario's folder."""
     d = BusSettings()
 
-    def get(key, kind):   # a bad value is already reported by the schema: fall back to the default
-        value = bus.get(key)
+    def get(key, kind, section=bus, default=d):   # a bad value is already reported by the schema
+        value = section.get(key)
         ok = isinstance(value, kind) and not (isinstance(value, bool) and kind is not bool)
-        return value if ok else getattr(d, key)
+        return value if ok else getattr(default, key)
 
     strings = lambda key: tuple(x for x in get(key, (list, tuple)) if isinstance(x, str))
+    tls = None
+    if isinstance(bus.get("tls"), dict):
+        section, t = bus["tls"], TlsSettings()
+        path = lambda key: str((base / section[key]).resolve()) if isinstance(section.get(key), str) else None
+        tls = TlsSettings(path("ca"), path("certificate"), path("key"), get("mutual", bool, section, t),
+                          get("verify_name", bool, section, t))
+    access = bus.get("access")
+    control = None
+    if isinstance(access, dict) and isinstance(access.get("control"), list):
+        control = tuple(x for x in access["control"] if isinstance(x, str))
     return BusSettings(get("mode", str), strings("listen"), strings("connect"), get("scouting", bool),
                        float(get("lease", (int, float))), get("on_loss", str),
-                       float(get("publish_period", (int, float))), strings("expose"))
+                       float(get("publish_period", (int, float))), strings("expose"), tls=tls,
+                       control=control, publish=get("publish", str))
 
 
 def _scenario_schema() -> dict:
@@ -234,7 +253,15 @@ class _Checker:
             rate, substeps, end, setting("seed", 0, int),
             event_driven=run.get("event_driven") is True,
             master=run.get("master") if run.get("master") in ("jacobi", "gauss-seidel") else "jacobi",
-            bus=_bus_settings(run["bus"]) if isinstance(run.get("bus"), dict) else None)
+            jam_after=float(setting("jam_after", 5.0)),
+            bus=self.bus_settings(run["bus"]) if isinstance(run.get("bus"), dict) else None)
+
+    def bus_settings(self, section: dict) -> BusSettings:
+        bus = _bus_settings(section, self.path.parent)
+        for place, message in tls_problems(bus.tls, bus.listen, bus.connect, listening=bus.mode != "client",
+                                           control=bus.control):
+            self.problem(("run", "bus") + place, message)
+        return bus
 
     def defaults(self, specs: dict) -> dict[str, dict]:
         """The `defaults` section: module name → parameters its objects get unless they set them."""

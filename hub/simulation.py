@@ -1,6 +1,7 @@
 """The Python API: load a scenario, swap in your logic, run until a time or a condition, read slots."""
 from __future__ import annotations
 
+import time
 from pathlib import Path
 from typing import Callable
 
@@ -8,8 +9,10 @@ from .errors import PlanthubError
 from .expectations import Outcome, Watcher
 from .master import Master, RunResult
 from .plant import Plant
+from .plant_summary import PlantTally
 from .recorder import Recorder
 from .registry import did_you_mean
+from .run_summary import RunSummary
 from .scenario import load_scenario
 from .slots import Direction, SlotRef, SlotType
 
@@ -24,7 +27,9 @@ class Simulation:
 
     `overrides` take dotted keys as `--set` does; `logic` maps an object to a replacement FMU for
     its state logic. Every source slot is computed (not only the ones flows and the recording
-    read), so any slot can be read at any point. `out` writes recording.csv and events.csv.
+    read), so any slot can be read at any point. `out` writes recording.csv and events.csv, and
+    summary.json when the simulation is closed. `summary()` gives the run summary at any point:
+    for a plant (sinks, sources) bottles in, delivered, misrouted, on the line, throughput, jams.
     """
 
     def __init__(self, scenario, overrides: dict | None = None, logic: dict | None = None,
@@ -33,6 +38,8 @@ class Simulation:
         for name, file in (logic or {}).items():
             changes[f"objects.{name}.logic"] = {"file": str(Path(file).resolve())}
         self.scenario = load_scenario(scenario, changes)
+        self.out = out
+        self.wall_seconds = 0.0   # spent in run and run_until
         self.plant = Plant(self.scenario)
         try:
             for comp in self.plant.components:
@@ -43,6 +50,7 @@ class Simulation:
             self.recorder = _Recorder(columns, run.physics_rate, out, log=self.events)
             self.master = Master(self.plant, self.recorder)
             self.watcher = Watcher(list(self.scenario.expect), self.plant.index, run.physics_rate)
+            self.tally = PlantTally.for_plant(self.plant)
             self.master.start()   # participants on the bus are launched and awaited here
             self.master.communicate()
             self._observe(self.master.tick)
@@ -57,22 +65,39 @@ class Simulation:
     def run(self, until: float | None = None) -> RunResult:
         """Run to `until` seconds (default: the scenario's duration)."""
         end = None if until is None else round(until * self.scenario.run.physics_rate)
-        return self.master.run(end, progress=lambda tick, _: self._observe(tick))
+        result = self.master.run(end, progress=lambda tick, _: self._observe(tick))
+        self.wall_seconds += result.wall_seconds
+        return result
 
     def run_until(self, condition: Callable[["Simulation"], bool], timeout: float) -> bool:
         """Step until `condition(sim)` holds at a communication point (True) or `timeout`
         simulated seconds have passed (False)."""
         limit = self.master.tick + round(timeout * self.scenario.run.physics_rate)
-        while not condition(self):
-            if self.master.tick >= limit:
-                return False
-            self.master.advance(limit)
-            self.master.communicate()
-            self._observe(self.master.tick)
-        return True
+        started = time.perf_counter()
+        try:
+            while not condition(self):
+                if self.master.tick >= limit:
+                    return False
+                self.master.advance(limit)
+                self.master.communicate()
+                self._observe(self.master.tick)
+            return True
+        finally:
+            self.wall_seconds += time.perf_counter() - started
 
     def _observe(self, tick: int) -> None:
         self.watcher.observe(tick, self.plant.signals)
+        if self.tally is not None:
+            self.tally.observe(tick)
+
+    def summary(self) -> RunSummary:
+        """The run summary now: what `planthub run` prints and writes to summary.json. Its
+        `plant` (None without sinks and sources) has bottles_in, delivered, by_destination,
+        sinks, misrouted, on_line, per_minute and jams; `as_dict()` is the JSON form."""
+        run = self.scenario.run
+        return RunSummary(self.scenario.name, self.scenario.path, self.master.tick, run.physics_rate, run.substeps,
+                          self.wall_seconds, self.recorder.stats, len(self.scenario.record), self.out,
+                          self.tally.summary() if self.tally is not None else None)
 
     def __getitem__(self, slot: str):
         """The slot's value now (a void slot: whether it fired at this point)."""
@@ -103,6 +128,8 @@ class Simulation:
         try:
             if getattr(self, "master", None) is not None:
                 self.master.close()
+                if self.out is not None and hasattr(self, "tally"):   # built far enough to summarise
+                    self.summary().write(Path(self.out) / "summary.json")
         finally:
             try:
                 if getattr(self, "recorder", None) is not None:

@@ -119,6 +119,17 @@ def reader(kind: SlotType):
     return check
 
 
+_PYTHON_TYPES = {SlotType.VOID: bool, SlotType.BOOL: bool, SlotType.INT: int, SlotType.REAL: float,
+                 SlotType.STRING: str}
+
+
+def python_types(kinds) -> tuple | None:
+    """The Python types msgpack gives for values of these slot types that need no conversion
+    (`reader` returns them as they are), or None if one of them always does (vec3, quat)."""
+    types = tuple(_PYTHON_TYPES.get(kind) for kind in kinds)
+    return None if None in types else types
+
+
 def from_wire(kind: SlotType, value, what: str):
     """The canonical slot value of a value received in a message; WireError names `what` if it does not fit."""
     if kind in (SlotType.VOID, SlotType.BOOL):

@@ -86,8 +86,13 @@ COMMON = {
     "grip": {"enum": ["surface", "along"], "default": "surface",
              "description": "surface: friction on both horizontal components towards the moving belt "
                             "surface (a curve turns the bottle); along: only along the belt (the paper)"},
+    "friction": {"type": "number", "exclusiveMinimum": 0,
+                 "description": "friction coefficient μ between belt and bottle: the belt accelerates a bottle "
+                                "by at most μ·g and slides under one held back, so a queue is pressed by μ·m·g "
+                                "per bottle (default: no limit, the paper's law; a queue of 40 then falls apart)"},
     "running": {"type": "boolean", "default": True},
-    "rail_height": length(0.04, "guard rail height above the surface, m"),
+    "rail_height": length(0.07, "guard rail height above the surface, m (above the bottles' contact ring at "
+                                "their centre of mass: over a lower rail a pressed queue leans and tips)"),
     "field_height": length(0.3, "height of the force-field region above the surface, m"),
 }
 
@@ -139,7 +144,7 @@ def build_segment(name: str, params: dict, world, line: Straight | Arc) -> dict[
     # The field reaches a little below the surface: a bottle rides ~2 mm deep in it at 150 Hz,
     # and a bottle gripped at its base must still be found inside.
     field = world.add_belt_field(line, half, z - SUPPORT_THICKNESS, z + params["field_height"], rate,
-                                 speed if running else 0.0, params["grip"], per_mass)
+                                 speed if running else 0.0, params["grip"], per_mass, params.get("friction"))
     world.anchors[name] = line.end
     return {"drive": BeltDrive(name, "drive", world, field, speed, running)}
 

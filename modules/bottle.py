@@ -20,7 +20,11 @@ Level of detail, per bottle (`model`, `shape`):
 | `base_body`  | a second body at the base, fixed constraint (paper's) | +47–56 % on a belt, +21–53 % off |
 
 `shape: cylinder` (default) or `hull`: the convex hull of a bottle profile (`profile`, pairs of
-height and radius from the base; inertia of the homogeneous cylinder, as in the paper).
+height and radius from the base; inertia of the homogeneous cylinder, as in the paper). A
+cylinder bottle touches others, gates and rails at its contact ring: `radius` is its widest
+ring, at its centre of mass, and its body is 5 % narrower, so a pressed queue pushes through
+the centres of mass and stands (hub/physics/world.py; a bottle wider than half its height
+stays a plain cylinder).
 `tests/bench.py` measures what each costs; `python -m hub report paper` compares the tilt.
 """
 from __future__ import annotations

@@ -54,25 +54,36 @@ class FmuLogic(Component):
         self.every = every        # own step in ticks, or None: every master step
         self.latest = None        # outputs in use; fetched at the first point
         self.ready_at = None      # the tick at which the last step's outputs are due
+        self._reads = ()          # (slot number, is event) per input, in the FMU's order
+        self._writes = ()         # (slot number, is event) per output
+
+    def bind(self, signals, index, needed):
+        super().bind(signals, index, needed)
+        # Slot numbers resolved once: sense and step run at every point for every logic object.
+        self._reads = tuple((index[slot], event) for slot, event in self.inputs)
+        self._writes = tuple((index[slot], event) for slot, event in self.outputs)
 
     def sense(self, tick):
         if self.latest is None or (self.ready_at is not None and tick >= self.ready_at):
             self.latest, self.ready_at = self.slave.outputs(), None
-        for (slot, event), value in zip(self.outputs, self.latest):
+        signals = self.signals
+        values, active = signals.values, signals.active
+        for (i, event), value in zip(self._writes, self.latest):   # Signals.emit, inlined
             if not event:
-                self.emit(slot, value)
+                if value is not None:
+                    values[i] = value
+                active[i] = True
             elif value:
-                self.emit(slot)
+                active[i] = True
 
     def step(self, tick, ticks):
         if self.every is not None:
             if tick % self.every:
                 return   # between two of its own points: it already stepped over this interval
             ticks = self.every
-        signals, index = self.signals, self.index
-        values = [signals.updated[index[slot]] if event else signals.values[index[slot]]
-                  for slot, event in self.inputs]
-        self.slave.set_inputs(values)
+        signals = self.signals
+        updated, values = signals.updated, signals.values
+        self.slave.set_inputs([updated[i] if event else values[i] for i, event in self._reads])
         self.slave.step(tick / self.rate, ticks / self.rate)
         self.ready_at = tick + ticks
 

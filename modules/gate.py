@@ -14,11 +14,12 @@
 Timing, in physics ticks at communication points: opening turns the collision off at once (the
 gate leaves the path) and reports `on_opened` after `travel_time`; closing turns it on after
 `travel_time`, and only once no bottle comes within MARGIN of the gate's boxes, because
-switching on a body inside a bottle tips it or pushes it the wrong way. Measured at 0.5 m/s,
-150 Hz: a 5 mm gate enabled 0–20 mm into a bottle tipped it by 3–4°, 30 mm in pushed it
-through to the far side; the switch blade enabled 2–21 mm into a bottle tipped it by
-2.0–3.7°, 32 mm in by 12°. Bullet pushes out gently (no bottle ran faster than 1.1× the
-belt), so the wait is about tipping and wrong sides, not launching. A command to the state the
+switching on a body inside a bottle pushes it out, or the wrong way. Measured at 0.5 m/s,
+150 Hz: a 5 mm gate enabled 0–25 mm into a bottle tilts it by under 1° (it touches the gate
+at its contact ring, hub/physics/world.py; a plain cylinder tipped by 3–5°), 30 mm in pushes
+it through to the far side; the switch blade enabled 2–21 mm into a (plain cylinder) bottle
+tipped it by 2.0–3.7°, 32 mm in by 12°. Bullet pushes out gently (no bottle ran faster than
+the belt), so the wait is about wrong sides, not launching. A command to the state the
 gate is in or heading for changes nothing; the opposite command while moving turns it round
 from that moment. Reached states are reported from the communication point after they are
 reached, like every source that reports the world.
@@ -40,20 +41,25 @@ MARGIN = 0.001
 
 
 def overlap(boxes: Boxes, positions: np.ndarray, radii: np.ndarray, half_heights: np.ndarray) -> float:
-    """How deep the deepest upright cylinder reaches into any of the boxes, m (≤ 0: none touches).
+    """How deep the deepest upright cylinder reaches into any of the boxes, m (≤ 0: none touches)."""
+    if len(positions) == 0:
+        return -math.inf
+    return float(depths(boxes, positions, radii, half_heights).max())
+
+
+def depths(boxes: Boxes, positions: np.ndarray, radii: np.ndarray, half_heights: np.ndarray) -> np.ndarray:
+    """How deep each upright cylinder reaches into each box, m, array (boxes, N) (≤ 0: it does
+    not touch; −inf: it is above or below the box).
 
     In each box's frame: r minus the horizontal distance from the axis to the box, or, with the
     axis inside the box, r plus the distance to the nearest side face."""
-    if len(positions) == 0:
-        return -math.inf
     local = boxes.local(positions)
     e = boxes.half_extents[:, None, :]
     outside = np.maximum(np.abs(local[..., :2]) - e[..., :2], 0.0)
     inside = np.min(e[..., :2] - np.abs(local[..., :2]), axis=-1)
     depth = np.where(inside > 0, radii[None, :] + inside, radii[None, :] - np.hypot(outside[..., 0], outside[..., 1]))
     level = np.abs(local[..., 2]) <= e[..., 2] + half_heights[None, :]
-    depth = np.where(level, depth, -math.inf)
-    return float(depth.max())
+    return np.where(level, depth, -math.inf)
 
 
 class Blocker:
@@ -115,10 +121,37 @@ class Blocker:
         self.reached = self.target
 
 
+class Holders:
+    """The parts that hold bottles back on purpose when closed (TwoPositions.HOLDS: stoppers and
+    separator gates), as one set of boxes, for the jam rule (hub/jams.py): how close each bottle
+    is to a closed one, in one numpy pass however many there are."""
+
+    def __init__(self, blockers: list[Blocker]):
+        self.blockers = blockers
+        self.boxes = Boxes()
+        owner = []
+        for k, b in enumerate(blockers):
+            for c, h, cos, sin in zip(b.boxes.centers, b.boxes.half_extents, b.boxes.cos, b.boxes.sin):
+                self.boxes.add(c, h, math.atan2(sin, cos))
+                owner.append(k)
+        self.owner = np.array(owner, dtype=int)
+
+    def depths(self, positions: np.ndarray, radii: np.ndarray, half_heights: np.ndarray) -> np.ndarray:
+        """How deep each upright cylinder reaches into the nearest closed part, m (−inf: none is closed)."""
+        closed = np.array([b.solid for b in self.blockers], bool)[self.owner]
+        if not closed.any():
+            return np.full(len(positions), -math.inf)
+        reach = depths(self.boxes, positions, radii, half_heights)
+        return np.where(closed[:, None], reach, -math.inf).max(axis=0)
+
+
 class TwoPositions(Component):
     """A component for one Blocker; subclasses name the slots (NAMES: role → slot name)."""
 
     NAMES: dict[str, str] = {}
+    #: Whether the part, closed, holds bottles back on purpose (a stopper, a separator's gates):
+    #: bottles queued at it stand still without being jammed (hub/jams.py). A switch blade guides.
+    HOLDS: bool = False
 
     def __init__(self, obj, name, blocker: Blocker):
         super().__init__(obj, name)
@@ -159,13 +192,15 @@ class Gate(TwoPositions):
     NAMES = {"to_passable": "open", "to_solid": "close", "level": "closed", "is_solid": "is_closed",
              "is_passable": "is_open", "reached_solid": "on_closed", "reached_passable": "on_opened",
              "blocked": "blocked"}
+    HOLDS = True
 
 
 GATE_PARAMETERS = {
     "width": {"type": "number", "exclusiveMinimum": 0, "default": 0.1,
               "description": "clear width of the belt the gate closes, m"},
     "height": {"type": "number", "exclusiveMinimum": 0, "default": 0.08,
-               "description": "gate height above the surface, m (above a bottle's centre of mass, so it does not tip it)"},
+               "description": "gate height above the surface, m (above a bottle's contact ring at its centre of "
+                              "mass, so it does not tip it)"},
     "thickness": {"type": "number", "exclusiveMinimum": 0, "default": 0.005, "description": "gate thickness along the belt, m"},
     "travel_time": {"type": "number", "minimum": 0, "default": 0.1, "description": "time to open or close, s"},
 }

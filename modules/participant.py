@@ -9,12 +9,20 @@ The process (any language: schemas/wire.md; in Python: `hub.participant`) announ
 inputs and outputs and gets `parameters` when the hub welcomes it. With `command` the hub starts
 it (in `cwd`, default the scenario's folder; `python` is the hub's own interpreter) and stops it
 at the end; without, it waits `join_timeout` s for one started elsewhere (`--run`, `--name`,
-`--connect`). Like an FMU it steps from t to t + h with the inputs of t, and its outputs appear
-at t + h; `step` gives it its own, longer step. A void input is true in the steps a flow fed it;
+`--connect`). A Python participant can be named by its module instead: `python: [MODULE, ARGS…]`
+launches `python -m MODULE ARGS…`, and with `in_process: true` the hub makes the same logic with
+MODULE's `participant(ARGS)` and steps it in its own process, without the bus (hub/inprocess.py):
+the same results, bit for bit, without the round trip. Like an FMU it steps from t to t + h with
+the inputs of t, and its outputs appear at t + h; `step` gives it its own, longer step. A void input is true in the steps a flow fed it;
 a void output true fires the event.
 """
 from __future__ import annotations
 
+import contextlib
+import sys
+from pathlib import Path
+
+from hub.inprocess import InProcessSlave, make_logic
 from hub.lockstep import RemoteSlave, RemoteSpec
 from hub.logic import own_step_problems
 from hub.module import Module
@@ -38,6 +46,10 @@ class ParticipantModule(Module):
             "parameters": {"type": "object", "default": {}, "description": "values sent to the participant when it joins"},
             "command": {"type": "array", "items": {"type": "string"}, "minItems": 1,
                         "description": "the hub starts this command (in cwd); without: it joins by itself"},
+            "python": {"type": "array", "items": {"type": "string"}, "minItems": 1,
+                       "description": "instead of `command`: a Python participant module and its arguments"},
+            "in_process": {"type": "boolean", "default": False,
+                           "description": "with `python`: run the logic inside the hub, not as a process on the bus"},
             "cwd": {"type": "string", "x-path": True, "default": ".",
                     "description": "folder the command runs in, relative to the scenario file"},
             "join_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
@@ -52,7 +64,12 @@ class ParticipantModule(Module):
     @classmethod
     def check(cls, params):
         both = sorted(set(params["inputs"]) & set(params["outputs"]))
-        return [(("outputs", name), f"{name!r} is also an input: slot names must differ") for name in both]
+        problems = [(("outputs", name), f"{name!r} is also an input: slot names must differ") for name in both]
+        if "python" in params and "command" in params:
+            problems.append((("python",), "give `command` (any program) or `python` (a Python module), not both"))
+        if params["in_process"] and "python" not in params:
+            problems.append((("in_process",), "only a Python participant (`python: [MODULE, ...]`) runs in-process"))
+        return problems
 
     @classmethod
     def check_run(cls, params, run):
@@ -68,9 +85,32 @@ class ParticipantModule(Module):
         inputs = tuple((n, SlotType(t)) for n, t in params["inputs"].items())
         outputs = tuple((n, SlotType(t)) for n, t in params["outputs"].items())
         command = tuple(params["command"]) if "command" in params else None
+        if "python" in params:
+            command = ("python", "-m", *params["python"])
         spec = RemoteSpec(name, inputs, outputs, dict(params["parameters"]), command, params["cwd"],
                           float(params["join_timeout"]))
+        if params["in_process"]:
+            module, *argv = params["python"]
+            with _importable(params["cwd"]):
+                logic = make_logic(module, argv, f"{spec.label} (in-process)")
+            slave = InProcessSlave(spec, logic)
+        else:
+            slave = RemoteSlave(spec, world.rate)
         as_pairs = lambda pairs: [(n, k is SlotType.VOID) for n, k in pairs]
         every = round(params["step"] * world.rate) if "step" in params else None
-        return {"logic": FmuLogic(name, "logic", cls.slots(params)["logic"], RemoteSlave(spec, world.rate),
+        return {"logic": FmuLogic(name, "logic", cls.slots(params)["logic"], slave,
                                   as_pairs(inputs), as_pairs(outputs), world.rate, every)}
+
+
+@contextlib.contextmanager
+def _importable(folder: str):
+    """Modules in `folder` (where a launched participant would run) import, as they would there."""
+    folder = str(Path(folder).resolve())
+    added = folder not in sys.path
+    if added:
+        sys.path.insert(0, folder)
+    try:
+        yield
+    finally:
+        if added:
+            sys.path.remove(folder)

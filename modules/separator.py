@@ -23,18 +23,24 @@ WP stands where the second bottle of a queue held by BP begins, so closing it al
 that bottle's front: a gate could never wait for a gap in a queue of touching bottles. So WP,
 unlike every other gate, may close onto a bottle reaching up to `push` into it, and the
 engine pushes that bottle (and the queue behind it) back by that much. Measured with a 5 mm
-gate at 0.5 m/s: switching on at up to 20 mm of overlap moves the bottle at under the belt
-speed and tilts it by under 4°; at 30 mm (its axis at the gate) it is pushed through.
-The bottles must come in single file: a lane a little wider than a bottle (in a 10 cm lane
-6 cm bottles queue zig-zag, side by side).
+gate at 0.5 m/s, 150 Hz: switching on at up to 25 mm of overlap pushes the bottle back at
+under the belt speed and tilts it by under 1°; at 30 mm (its axis at the gate) it is pushed
+through. The bottles must come in single file: a lane a little wider than a bottle (in a
+10 cm lane 6 cm bottles queue zig-zag, side by side).
 
-Physics rate: a queue pressed by the belt sinks into its contacts by Bullet's compliance,
-which grows with the tick squared. Measured, first bottle's depth into a stopper, 1 / 6
-bottles queued: 4.9 / 17 mm at 150 Hz, 0.3 / 4.7 mm at 300 Hz, 0.0 / 0.4 mm at 1000 Hz (and
-0.3 / 1.1 mm at 150 Hz with contactERP 0.8, a world setting). At 150 Hz the second bottle's
-position is too loose for WP: scenarios/separator.yaml then lets two bottles through in one
-cycle; from 300 Hz it lets one per cycle (released bottles rock up to 7° at 300 Hz, 5° at
-500 Hz, 2° at 1000 Hz), so it runs at 500 Hz.
+Physics rate: the separator works at the paper's 150 Hz with a queue of any length pressed
+against BP, because bottles touch at their contact ring, through their centre of mass
+(hub/physics/world.py), and the belt's `friction` bounds how hard a held queue is pushed
+(μ·m·g per bottle; the field's law alone, k = 16/s at 0.5 m/s, pushes at 0.8 g). Measured, a queue
+pressed against a stopper at 150 Hz, μ = 0.2 (`python -m tests.bench_queue`): 12 bottles, the
+first 0.01 mm into the gate, neighbours 0.3 mm into each other, tilt under 1°; 40 bottles,
+1.2 mm and 0.8°. With plain cylinders (as one-link multibodies, 50 solver iterations) the
+first bottle sank 25 mm into the gate and 15-20 mm into the floor and WP could not close
+between two bottles, so this needed 500 Hz. Guard
+rails must reach above the contact ring (the conveyor's default `rail_height`, 7 cm, does
+for a 10 cm bottle): over a lower rail a zig-zag queue leans and tips.
+scenarios/separator.yaml and separator_logic.yaml let eight queued bottles through at 150 Hz,
+one per cycle.
 
 The gates are interlocked, as a separator's mechanics keeps them: a gate opens only while the
 other is closed, so at least one always holds the queue. A logic that moves both at once (the

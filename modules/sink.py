@@ -1,23 +1,32 @@
-"""Sink: takes every bottle that enters its volume out of the plant and counts them by destination.
+"""Sink: takes every bottle that enters its volume out of the plant, counts them by destination and names the misrouted.
 
 | slot              | type   | dir    | meaning                                                     |
 |-------------------|--------|--------|-------------------------------------------------------------|
 | bin.taken         | void   | source | a bottle was taken out in this step                         |
 | bin.object        | string | source | id of the bottle taken last; active with taken              |
 | bin.destination   | string | source | its destination; active with taken                          |
+| bin.misrouted     | void   | source | a bottle for another lane was taken out in this step        |
 | count.total       | int    | source | bottles taken so far, every step                            |
 | count.DEST        | int    | source | bottles with destination DEST taken so far (one per name in `destinations`) |
 | count.other       | int    | source | bottles with any other destination, every step              |
+| count.misrouted   | int    | source | bottles taken whose destination is not in `accepts`, every step |
 
 A bottle is taken out at the first communication point after it entered (it is parked off
 stage, see hub/physics/world.py `park`, and costs nothing from then on); all bottles that
 entered since the last point are taken, in the order they entered. Destinations come from
 the plant's manifest (modules/manifest.py): a source's bottles carry theirs, a `bottle`
 object has none and counts as `other`.
+
+`accepts` says which destinations the sink's lane is for: a bottle whose destination is not
+among them (a bottle without a destination included) is misrouted — counted on
+`count.misrouted`, fired on `bin.misrouted` and logged as `bin.misrouted` with its id and
+destination. A sink without `accepts` takes every bottle and judges none (the run summary
+then says misroutes were not judged). `destinations` only chooses the counting slots.
 """
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 
 from hub.component import Component
 from hub.module import Module
@@ -27,6 +36,18 @@ from .manifest import cargo
 from .trigger import add_volume, volume_parameters
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_RESERVED = ("total", "other", "misrouted")
+
+
+@dataclass(frozen=True)
+class Delivery:
+    """One bottle taken out: at which communication point, which bottle, and whether its lane was wrong."""
+
+    tick: int
+    body: int            # the world's body number
+    bottle: str          # its id
+    destination: str     # "" when it has none
+    misrouted: bool      # the sink states `accepts` and the destination is not among them
 
 
 class Bin(Component):
@@ -34,49 +55,64 @@ class Bin(Component):
         Slot.source("taken", "void", "a bottle was taken out"),
         Slot.source("object", "string", "id of the bottle taken last"),
         Slot.source("destination", "string", "its destination"),
+        Slot.source("misrouted", "void", "a bottle for another lane was taken out"),
     )
 
-    def __init__(self, obj, name, world, trigger, counter):
+    def __init__(self, obj, name, world, trigger, counter, accepts: tuple[str, ...] | None):
         super().__init__(obj, name)
         self.world = world
         self.trigger = trigger
         self.counter = counter
-        self.taken: list[int] = []
+        self.accepts = accepts            # None: the sink judges no destination
+        self.taken: list[Delivery] = []   # taken at this point, parked at actuation
+        self.deliveries: list[Delivery] = []   # every bottle taken so far, in order (the run summary reads it)
 
     def sense(self, tick):
         latch = self.world.take_trigger(self.trigger)
-        world = self.world
-        self.taken = [n for _, n in latch.entered if not world.is_parked(n)]
-        for n in self.taken:
-            self.counter.add(cargo(world, n).destination)
+        world, accepts = self.world, self.accepts
+        self.taken = []
+        for _, n in latch.entered:
+            if world.is_parked(n):
+                continue
+            entry = cargo(world, n)
+            wrong = accepts is not None and entry.destination not in accepts
+            self.taken.append(Delivery(tick, n, entry.id, entry.destination, wrong))
+            self.counter.add(entry.destination, wrong)
+        self.deliveries.extend(self.taken)
         if self.taken:
-            last = cargo(world, self.taken[-1])
+            last = self.taken[-1]
             self.emit("taken")
-            self.emit("object", last.id)
+            self.emit("object", last.bottle)
             self.emit("destination", last.destination)
+            if any(d.misrouted for d in self.taken):
+                self.emit("misrouted")
 
     def actuate(self):
-        for n in self.taken:
-            self.world.park(n)
+        for d in self.taken:
+            self.world.park(d.body)
         self.taken = []
 
     def events(self, tick):
-        for n in self.taken:
-            yield tick, "taken", self.world.labels[n]
+        for d in self.taken:
+            yield tick, "taken", d.bottle
+        for d in self.taken:
+            if d.misrouted:
+                yield tick, "misrouted", f"{d.bottle} (for {d.destination or 'no destination'})"
 
 
 class Count(Component):
-    """Slots `total`, one per listed destination, and `other`; set per instance."""
+    """Slots `total`, one per listed destination, `other` and `misrouted`; set per instance."""
 
     def __init__(self, obj, name, destinations):
         super().__init__(obj, name)
         self.SLOTS = Sink.count_slots(destinations)
         self.counts = {slot.name: 0 for slot in self.SLOTS}
 
-    def add(self, destination: str) -> None:
+    def add(self, destination: str, misrouted: bool = False) -> None:
         self.counts["total"] += 1
-        key = destination if destination in self.counts and destination not in ("total", "other") else "other"
+        key = destination if destination in self.counts and destination not in _RESERVED else "other"
         self.counts[key] += 1
+        self.counts["misrouted"] += misrouted
 
     def sense(self, tick):
         for name, value in self.counts.items():
@@ -92,6 +128,10 @@ class Sink(Module):
             **volume_parameters([0.05, 0.1, 0.1], "volume"),
             "destinations": {"type": "array", "items": {"type": "string"}, "uniqueItems": True, "default": [],
                              "description": "destinations counted on their own slots count.NAME"},
+            "accepts": {"type": "array", "items": {"type": "string", "minLength": 1}, "uniqueItems": True,
+                        "minItems": 1,
+                        "description": "destinations this sink's lane is for; a bottle for any other is misrouted "
+                                       "(default: judge none)"},
         },
         "required": ["position"],
         "additionalProperties": False,
@@ -102,7 +142,8 @@ class Sink(Module):
     def count_slots(destinations) -> tuple[Slot, ...]:
         return (Slot.source("total", "int", "bottles taken so far"),
                 *(Slot.source(d, "int", f"bottles for {d!r} taken so far") for d in destinations),
-                Slot.source("other", "int", "bottles for any other destination taken so far"))
+                Slot.source("other", "int", "bottles for any other destination taken so far"),
+                Slot.source("misrouted", "int", "bottles taken whose destination is not in `accepts`"))
 
     @classmethod
     def slots(cls, params):
@@ -115,11 +156,12 @@ class Sink(Module):
             if not _NAME.match(d):
                 problems.append((("destinations", i), f"{d!r} cannot name a slot: use letters, digits and _ "
                                                        "(not starting with a digit)"))
-            elif d in ("total", "other"):
+            elif d in _RESERVED:
                 problems.append((("destinations", i), f"{d!r} is taken by the slot count.{d}"))
         return problems
 
     @classmethod
     def build(cls, name, params, world):
         counter = Count(name, "count", params["destinations"])
-        return {"bin": Bin(name, "bin", world, add_volume(world, params), counter), "count": counter}
+        accepts = tuple(params["accepts"]) if "accepts" in params else None
+        return {"bin": Bin(name, "bin", world, add_volume(world, params), counter, accepts), "count": counter}

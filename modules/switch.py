@@ -150,5 +150,5 @@ class Switch(Module):
         rate, per_mass = (params["gain"], False) if "gain" in params else (params.get("k", K_DEFAULT), True)
         speed, running = params["speed"], params["running"]
         field = world.add_belt_field(line, half, z - SUPPORT_THICKNESS, z + params["field_height"], rate,
-                                     speed if running else 0.0, params["grip"], per_mass)
+                                     speed if running else 0.0, params["grip"], per_mass, params.get("friction"))
         return BeltDrive(name, "main", world, field, speed, running)

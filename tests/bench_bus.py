@@ -17,49 +17,57 @@ from hub.scenario import BusSettings, load_scenario
 
 from .helpers import ROOT
 
-STEPS = 3000
-REPEATS = 5
+REPEATS = 5          # data plane: runs per case
+SEGMENTS = 25        # lockstep: the floor and the hub take turns this many times per N
+SEGMENT = 300        # lockstep: rounds (floor) and steps (hub) per turn
+WARM_UP = 200
 
 
-def ping_pong(n: int, rounds: int) -> float:
-    """Rounds per second: the hub side puts one ~40-byte message to each of n echo processes and
-    waits for all n answers, as lockstep does, with nothing else."""
-    payload = bytes(40)
-    with Bus(BusSettings()) as bus:
-        inbox = Inbox()
-        pings = [bus.publisher(f"bench/{i}/ping", "zenoh/bytes") for i in range(n)]
+class PingPong:
+    """The floor: bare Zenoh ping-pong through hub.bus. This process puts one 40-byte message to
+    each of n echo processes and waits for all n answers, as lockstep does, with nothing else."""
+
+    def __init__(self, n: int):
+        self.n = n
+        self.bus = Bus(BusSettings())
+        self.inbox = Inbox()
+        self.pings = [self.bus.publisher(f"bench/{i}/ping", "zenoh/bytes") for i in range(n)]
         for i in range(n):
-            bus.subscribe_payloads(f"bench/{i}/pong", inbox.put)
-        echoes = [subprocess.Popen([sys.executable, "-m", "tests.participants.echo", bus.endpoints[0], str(i)],
-                                   cwd=ROOT) for i in range(n)]
-        try:
-            if not wait_until(lambda: all(p.matching for p in pings), 30):
-                raise RuntimeError("echo processes did not subscribe")
+            self.bus.subscribe_payloads(f"bench/{i}/pong", self.inbox.put)
+        self.echoes = [subprocess.Popen([sys.executable, "-m", "tests.participants.echo", self.bus.endpoints[0],
+                                         str(i)], cwd=ROOT) for i in range(n)]
+        if not wait_until(lambda: all(p.matching for p in self.pings), 30):
+            self.close()
+            raise RuntimeError("echo processes did not subscribe")
+        self.rate(WARM_UP)   # the first answers may still race the echoes' own declarations
 
-            def round_trip():
-                for p in pings:
-                    p.put(payload)
-                for _ in range(n):
-                    if inbox.get(5.0) is None:
-                        raise RuntimeError("an echo did not answer")
-            for _ in range(200):   # warm-up: the first answer may still race the echo's own declarations
-                round_trip()
-            started = time.perf_counter()
-            for _ in range(rounds):
-                round_trip()
-            return rounds / (time.perf_counter() - started)
-        finally:
+    def rate(self, rounds: int) -> float:
+        """Rounds per second over `rounds` round trips."""
+        payload, pings, get, n = bytes(40), self.pings, self.inbox.get, self.n
+        started = time.perf_counter()
+        for _ in range(rounds):
             for p in pings:
+                p.put(payload)
+            for _ in range(n):
+                if get(5.0) is None:
+                    raise RuntimeError("an echo did not answer")
+        return rounds / (time.perf_counter() - started)
+
+    def close(self) -> None:
+        try:
+            for p in self.pings:
                 p.put(b"stop")
-            for e in echoes:
+            for e in self.echoes:
                 try:
                     e.wait(5)
                 except subprocess.TimeoutExpired:
                     e.kill()
                     e.wait()
+        finally:
+            self.bus.close()
 
 
-def lockstep_scene(n: int, folder: Path) -> Path:
+def lockstep_scene(n: int, folder: Path, steps: int = WARM_UP + SEGMENTS * SEGMENT) -> Path:
     """n belt-drive participants fed by constants, no bodies: one physics tick per step (1 kHz)."""
     drives = "\n".join(f"""  d{i}:
     module: participant
@@ -71,7 +79,7 @@ def lockstep_scene(n: int, folder: Path) -> Path:
                       f"  - {{from: setpoint.value.out, to: d{i}.logic.speed_setpoint}}" for i in range(n))
     path = folder / f"lockstep{n}.yaml"
     path.write_text(f"""planthub: 1
-run: {{duration: {STEPS / 1000}, physics_rate: 1000}}
+run: {{duration: {(steps + 1) / 1000}, physics_rate: 1000}}
 objects:
   go: {{module: constant, type: bool, value: true, always: true}}
   setpoint: {{module: constant, type: real, value: 0.5, always: true}}
@@ -82,45 +90,74 @@ flows:
     return path
 
 
-def lockstep(path: Path) -> float:
-    """Steps per second of the hub's loop with its participants (joined before the clock starts)."""
-    scenario = load_scenario(path)
-    with Plant(scenario) as plant:
-        with Master(plant, Recorder([], scenario.run.physics_rate)) as master:
-            master.start()
-            master.run(until_tick=200)   # warm-up
-            end = scenario.run.end_tick - scenario.run.substeps   # the last step closes the run: not timed
-            started = time.perf_counter()
-            result = master.run(until_tick=end)
-            return (result.ticks / scenario.run.substeps) / (time.perf_counter() - started)
+class HubLoop:
+    """The hub's full loop with its participants, joined and warmed up before any clock starts."""
+
+    def __init__(self, path: Path):
+        scenario = load_scenario(path)
+        self.plant = Plant(scenario)
+        try:
+            self.master = Master(self.plant, Recorder([], scenario.run.physics_rate))
+            self.master.start()
+            self.master.run(until_tick=WARM_UP)
+        except BaseException:
+            self.close()
+            raise
+
+    def rate(self, steps: int) -> float:
+        """Steps per second over the next `steps` steps (one tick each)."""
+        master = self.master
+        started = time.perf_counter()
+        master.run(until_tick=master.tick + steps)
+        return steps / (time.perf_counter() - started)
+
+    def close(self) -> None:
+        try:
+            if hasattr(self, "master"):
+                self.master.close()
+        finally:
+            self.plant.close()
 
 
 def bus_lockstep() -> None:
     print("\n## Lockstep over Zenoh: steps/s with N participant processes (loopback, 2 cores)\n")
     print("Bare ping-pong: the hub puts one 40-byte message to each of N echo processes and waits for N "
           "answers. Hub: the full loop (an empty physics world at 1 kHz, step messages, outputs decoded, "
-          "Python belt-drive participants). Medians of 5, measured alternately in this run.\n")
+          f"Python belt-drive participants). Both set up side by side, then taking turns of {SEGMENT} "
+          f"rounds or steps, {SEGMENTS} times: medians, and the median of the {SEGMENTS} ratios of "
+          "neighbouring turns. Echo processes and participants alike run in this process's session (the "
+          "hub launches its participants in a process group of their own, in its session), so the "
+          "scheduler treats both sides the same.\n")
     print("| participants | bare Zenoh ping-pong rounds/s | hub lockstep steps/s | ping-pong / hub |")
     print("|---:|---:|---:|---:|")
     with tempfile.TemporaryDirectory() as tmp:
         for n in (1, 2, 4):
-            path = lockstep_scene(n, Path(tmp))
             floor, hub = [], []
-            for _ in range(REPEATS):
-                floor.append(ping_pong(n, STEPS))
-                hub.append(lockstep(path))
-            f, h = statistics.median(floor), statistics.median(hub)
-            print(f"| {n} | {f:.0f} | {h:.0f} | {f / h:.2f} |")
+            pong = PingPong(n)
+            try:
+                loop = HubLoop(lockstep_scene(n, Path(tmp)))
+                try:
+                    for _ in range(SEGMENTS):
+                        floor.append(pong.rate(SEGMENT))
+                        hub.append(loop.rate(SEGMENT))
+                finally:
+                    loop.close()
+            finally:
+                pong.close()
+            ratio = statistics.median(f / h for f, h in zip(floor, hub))
+            print(f"| {n} | {statistics.median(floor):.0f} | {statistics.median(hub):.0f} | {ratio:.2f} |",
+                  flush=True)
 
 
 def data_plane() -> None:
     print("\n## Data plane: cost per communication point (belt_bottle_sensor, 150 Hz, 20 s)\n")
     print("Every slot exposed (`expose: ['*']`); the viewer, another process, subscribes to `plant/<run>/**`, "
-          "at every point or asking for one sample each 0.05 s.\n")
+          "at every point or asking for one sample each 0.05 s; `change`: with `run.bus.publish: change`.\n")
     print("| bus | subscribers | µs per point | samples per point |")
     print("|---|---|---:|---:|")
     path = ROOT / "scenarios" / "belt_bottle_sensor.yaml"
-    cases = (("none", None, None), ("open", 0, None), ("open", 1, None), ("open", 1, 0.05))
+    cases = (("none", None, None, "every"), ("open", 0, None, "every"), ("open", 1, None, "every"),
+             ("open", 1, 0.05, "every"), ("open", 1, None, "change"))
     costs, per_point = {case: [] for case in cases}, {}
     for _ in range(REPEATS):   # the cases take turns, so a change in the machine's load hits all alike
         for case in cases:
@@ -128,17 +165,18 @@ def data_plane() -> None:
             costs[case].append(cost)
             per_point[case] = samples
     for case in cases:
-        label, subscribers, period = case
+        label, subscribers, period, publish = case
         shown = "—" if subscribers is None else f"{subscribers}" + (f", every {period:g} s" if period else "")
+        shown += ", change" if publish == "change" else ""
         print(f"| {label} | {shown} | {1e6 * statistics.median(costs[case]):.0f} | {per_point[case]:.1f} |")
 
 
-def point_cost(path: Path, subscribers: int | None, period: float | None) -> tuple[float, float]:
+def point_cost(path: Path, subscribers: int | None, period: float | None, publish: str) -> tuple[float, float]:
     """Seconds per communication point and data-plane samples per point of one run."""
     scenario = load_scenario(path, {"run.duration": 20.0})
     points = scenario.run.end_tick // scenario.run.substeps
     with Plant(scenario) as plant:
-        bus = Bus(BusSettings()) if subscribers is not None else None
+        bus = Bus(BusSettings(publish=publish)) if subscribers is not None else None
         viewer = None
         try:
             with Master(plant, Recorder([], scenario.run.physics_rate), bus=bus) as master:
@@ -168,5 +206,11 @@ def point_cost(path: Path, subscribers: int | None, period: float | None) -> tup
 
 
 if __name__ == "__main__":
-    bus_lockstep()
-    data_plane()
+    parts = sys.argv[1:] or ["lockstep", "dataplane"]   # e.g. `python -m tests.bench_bus lockstep`
+    unknown = set(parts) - {"lockstep", "dataplane"}
+    if unknown:
+        raise SystemExit(f"unknown part {', '.join(sorted(unknown))}: give lockstep and/or dataplane")
+    if "lockstep" in parts:
+        bus_lockstep()
+    if "dataplane" in parts:
+        data_plane()

@@ -1,4 +1,4 @@
-"""`make bench`, plant elements: what a parked bottle, an idle or moving arm and a gate switch cost per tick."""
+"""`make bench`, plant elements: what a parked bottle, an idle or moving arm and a gate switch cost per tick; queues (tests/bench_queue.py)."""
 from __future__ import annotations
 
 import statistics
@@ -102,9 +102,12 @@ def gate_switch() -> None:
 
 
 def plant_elements() -> None:
+    from .bench_queue import queues
+
     parked_bottles()
     robot_arm()
     gate_switch()
+    queues()
 
 
 if __name__ == "__main__":

@@ -61,7 +61,9 @@ def test_bottle_stays_upright_and_on_the_belt(tmp_path):
     tilt = columns.index("bottle.body.tilt")
     for row in rows:
         cells = [float(c) for c in row.split(",")]
-        assert abs(cells[y]) < 1e-3 and cells[tilt] < 0.5
+        # It rocks by under 0.6° at 150 Hz: Bullet finds the contact points of a base sliding
+        # over the fixed floor anew as it slides (a bump at a seam tips it over, 90°).
+        assert abs(cells[y]) < 1e-3 and cells[tilt] < 1.0
         # Bullet lets a sliding cylinder ride about 2 mm deep at 150 Hz (0.1 mm at 1000 Hz).
         assert abs(cells[z] - 0.05) < 3e-3
 

@@ -73,8 +73,9 @@ def test_belts_butted_end_to_end_share_one_floor_so_a_bottle_crosses_without_a_b
                           "record: [bottle.body.position, bottle.body.tilt]\n")
     result = run(path)
     # Four separate floor boxes tip this bottle over at the first seam (90°); one merged floor
-    # carries it as a single belt does.
-    assert np.max(result.columns["bottle.body.tilt"]) < 0.5
+    # carries it as a single belt does: it rocks by under 0.6°, as on any belt, because Bullet
+    # finds the contact points of a base sliding over the fixed floor anew as it slides.
+    assert np.max(result.columns["bottle.body.tilt"]) < 1.0
     assert np.ptp(result.columns["bottle.body.position.z"][150:]) < 1e-3
 
 

@@ -41,12 +41,12 @@ def test_passing_expectations_exit_0_and_write_junit(fmus, tmp_path):
 def test_wrong_control_fails_naming_what_went_wrong(fmus, tmp_path):
     proc = planthub_test(SWITCH, *WRONG, "--junit", tmp_path / "report.xml")
     assert proc.returncode == 1
-    assert "  ✗ only B reaches the branch — failed 1×: at 4.093 s it was 'A'\n" in proc.stdout
+    assert "  ✗ only B reaches the branch — failed 1×: at 4.013 s it was 'A'\n" in proc.stdout
     assert "  ✗ the blade is in working position by 0.5 s — sw.blade.in_working was False at 0.5 s\n" in proc.stdout
     assert proc.stdout.splitlines()[-1] == "2 passed, 2 failed"
     failures = ElementTree.parse(tmp_path / "report.xml").getroot().iter("failure")
     assert [f.get("message") for f in failures] == [
-        "sw.blade.in_working was False at 0.5 s", "failed 1×: at 4.093 s it was 'A'"]
+        "sw.blade.in_working was False at 0.5 s", "failed 1×: at 4.013 s it was 'A'"]
 
 
 def test_a_scenario_without_expectations_is_named(tmp_path):

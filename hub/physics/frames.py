@@ -159,6 +159,7 @@ class CentreLines:
         self.turn = np.zeros(0)            # +1 left, −1 right, 0 straight
         self.angle0 = np.zeros(0)          # arc: polar angle of the start point
         self.length = np.zeros(0)          # along-extent, m
+        self.arcs = np.zeros(0, int)       # rows of the arcs
 
     def __len__(self) -> int:
         return len(self.is_arc)
@@ -173,6 +174,7 @@ class CentreLines:
         self.turn = np.append(self.turn, float(line.turn) if arc else 0.0)
         self.angle0 = np.append(self.angle0, line.start_angle if arc else 0.0)
         self.length = np.append(self.length, line.length)
+        self.arcs = np.flatnonzero(self.is_arc)
         return len(self.is_arc) - 1
 
     def points(self, lines: np.ndarray, along: np.ndarray) -> np.ndarray:
@@ -189,18 +191,18 @@ class CentreLines:
 
     def local(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(along, across), each (lines, N), for points (N, 2 or 3)."""
-        dx = points[None, :, 0] - self.origin[:, 0, None]
-        dy = points[None, :, 1] - self.origin[:, 1, None]
+        dx = points[:, 0] - self.origin[:, 0, None]
+        dy = points[:, 1] - self.origin[:, 1, None]
         c, s = self.cos[:, None], self.sin[:, None]
         along = c * dx + s * dy
-        across = -s * dx + c * dy
-        if self.is_arc.any():
-            turn, radius = self.turn[:, None], self.radius[:, None]
-            rho = np.hypot(dx, dy)
-            swept = np.mod(turn * (np.arctan2(dy, dx) - self.angle0[:, None]), TAU)
-            arc = self.is_arc[:, None]
-            along = np.where(arc, swept * radius, along)
-            across = np.where(arc, turn * (radius - rho), across)
+        across = c * dy - s * dx
+        arcs = self.arcs
+        if len(arcs):
+            # Only the arcs' rows: angles for every line would double the cost of a plant's locate.
+            ax, ay = dx[arcs], dy[arcs]
+            turn, radius = self.turn[arcs, None], self.radius[arcs, None]
+            along[arcs] = np.mod(turn * (np.arctan2(ay, ax) - self.angle0[arcs, None]), TAU) * radius
+            across[arcs] = turn * (radius - np.hypot(ax, ay))
         return along, across
 
 

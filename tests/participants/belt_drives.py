@@ -46,7 +46,14 @@ class SaysOneForTrue(BeltDrive):
         self.running = int(self.running)
 
 
+KINDS = {"slow": SlowOnEvenSteps, "fails": FailsAt, "plain": BeltDrive, "ints": SaysOneForTrue,
+         "stalls": StallsOnce}
+
+
+def participant(argv):
+    """The logic for `in_process: true`: the kind named by the first argument."""
+    return KINDS[argv[0]]()
+
+
 if __name__ == "__main__":
-    kind = {"slow": SlowOnEvenSteps, "fails": FailsAt, "plain": BeltDrive, "ints": SaysOneForTrue,
-            "stalls": StallsOnce}[sys.argv.pop(1)]
-    raise SystemExit(serve(kind()))
+    raise SystemExit(serve(KINDS[sys.argv.pop(1)]()))

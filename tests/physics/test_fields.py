@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from hub.physics.fields import ForceFields
+from hub.physics.frames import Pose, Straight
 
 
 def drive(k, dt, steps, speed=0.5, mass=0.05, v0=0.0):
@@ -61,3 +62,56 @@ def test_bodies_outside_every_field_get_no_force_and_the_first_field_wins():
     bodies, forces = fields.forces(positions, np.zeros((3, 3)), np.ones(3))
     assert bodies.tolist() == [0, 1]
     assert forces[0, 0] > 0 and forces[1, 0] < 0
+
+
+def test_friction_caps_the_acceleration_and_the_exact_update_takes_over_below_it():
+    """A belt with friction μ accelerates a bottle by at most μ·g: from rest on a 0.5 m/s belt
+    (k = 16/s would give 8 m/s²) at μ·g until the exact update asks for less, then exactly as
+    without the cap."""
+    dt, k, mu, g = 1 / 150, 16.0, 0.2, 9.81
+    fields = ForceFields(dt)
+    fields.add_region(Straight(Pose(0, 0, 0, 0), 10), 1.0, -1, 1, k, 0.5, limit=mu * g)
+    v, history = np.zeros((1, 3)), []
+    for _ in range(150):
+        _, forces = fields.forces(np.zeros((1, 3)), v, np.array([0.05]))
+        history.append(forces[0, 0] / 0.05)
+        v = v + forces / 0.05 * dt
+    a = np.array(history)
+    assert a.max() == pytest.approx(mu * g, rel=1e-12)
+    capped = int(np.sum(np.isclose(a, mu * g, rtol=1e-12)))
+    # While capped the speed grows linearly; the first uncapped tick relaxes the rest exactly.
+    assert 10 < capped < 35
+    assert np.all(a[capped:] < mu * g)
+    assert a[capped + 1] == pytest.approx(a[capped] * math.exp(-k * dt), rel=1e-9)
+    assert v[0, 0] == pytest.approx(0.5, abs=1e-6)
+
+
+def test_a_held_bottle_is_pushed_by_friction_alone_whatever_the_direction():
+    fields = ForceFields(1 / 150)
+    fields.add_region(Straight(Pose(0, 0, 0, 0.3), 10), 1.0, -1, 1, 16.0, 0.5, limit=0.1 * 9.81)
+    _, forces = fields.forces(np.zeros((1, 3)), np.array([[0.0, -0.2, 0.0]]), np.array([0.08]))
+    assert np.hypot(*forces[0, :2]) == pytest.approx(0.08 * 0.1 * 9.81, rel=1e-12)
+
+
+def test_the_surface_grips_a_spinning_base():
+    """The spin about the vertical decays exactly at the field's rate, capped by the friction
+    over the base, (2/3)·μ·m·g·r, on straights and curves alike; the paper's `along` grip does
+    not touch it, nor is a spin under SPIN_AT_REST touched."""
+    from hub.physics.fields import SPIN_AT_REST
+    from hub.physics.frames import Arc
+
+    dt, k, m, r = 1 / 150, 16.0, 0.05, 0.03
+    fields = ForceFields(dt)
+    fields.add_region(Straight(Pose(0, 0, 0, 0), 10), 1.0, -1, 1, k, 0.5)
+    fields.add_region(Straight(Pose(0, 5, 0, 0), 10), 1.0, -1, 1, k, 0.5, limit=0.1 * 9.81)
+    fields.add_region(Arc(Pose(0, 10, 0, 0), 0.5, math.pi / 2, 1), 0.1, -1, 1, k, 0.5)
+    fields.add_region(Straight(Pose(0, 20, 0, 0), 10), 1.0, -1, 1, k, 0.5, grip="along")
+    f, masses, radii = np.array([0, 1, 2, 3]), np.full(4, m), np.full(4, r)
+    torques = fields.spin_torques(f, np.array([5.0, 5.0, -2.0, 5.0]), masses, radii)
+    inertia = m * r * r / 2
+    assert torques[0] == pytest.approx(-inertia * 5.0 * (1 - math.exp(-k * dt)) / dt, rel=1e-12)
+    assert torques[1] == pytest.approx(-(2 / 3) * 0.1 * 9.81 * m * r, rel=1e-12)
+    assert torques[2] == pytest.approx(inertia * 2.0 * (1 - math.exp(-k * dt)) / dt, rel=1e-12)
+    assert torques[3] == 0.0
+    slow = fields.spin_torques(f[:1], np.array([SPIN_AT_REST / 2]), masses[:1], radii[:1])
+    assert slow[0] == 0.0

@@ -1,0 +1,253 @@
+"""The bus over TLS, on loopback, with certificates made for the test: a run gives the same recording
+as over tcp; a participant without the right authority or certificate cannot join, and says why.
+
+    drive.logic ══ tls/127.0.0.1 (mutual) ══ python -m modules.belt_drive_logic
+"""
+import pytest
+import trustme
+
+from hub.bus import Bus, BusError, free_loopback_endpoint
+from hub.errors import ScenarioError, SimulationError
+from hub.scenario import BusSettings, load_scenario
+from hub.tls import TlsSettings
+
+from .bus_support import BELT_FMU, BELT_PARTICIPANT, hub, output_of, process, same_files
+from .helpers import run_scenario
+
+
+@pytest.fixture(scope="module")
+def certs(tmp_path_factory):
+    """An authority with the hub's certificate (for 127.0.0.1), a participant's and an HMI's, each
+    with its name as common name; a second, unrelated authority with a certificate of its own."""
+    folder = tmp_path_factory.mktemp("certs")
+    ca, stranger = trustme.CA(), trustme.CA()
+    ca.cert_pem.write_to_path(folder / "ca.pem")
+    stranger.cert_pem.write_to_path(folder / "stranger_ca.pem")
+    for name, authority, identities in (("hub", ca, ("127.0.0.1", "localhost")), ("plc", ca, ("plc.example",)),
+                                        ("hmi", ca, ("hmi.example",)), ("intruder", stranger, ("intruder.example",))):
+        cert = authority.issue_cert(*identities, common_name=name)
+        cert.private_key_pem.write_to_path(folder / f"{name}.key")
+        cert.cert_chain_pems[0].write_to_path(folder / f"{name}.pem")
+    return folder
+
+
+def tls_section(certs, **extra):
+    return {"ca": str(certs / "ca.pem"), "certificate": str(certs / "hub.pem"), "key": str(certs / "hub.key"),
+            "mutual": True, **extra}
+
+
+def tls_endpoint() -> str:
+    return free_loopback_endpoint().replace("tcp/", "tls/")
+
+
+@pytest.fixture(scope="module")
+def over_tcp(tmp_path_factory):
+    out = tmp_path_factory.mktemp("over_tcp")
+    run_scenario(BELT_PARTICIPANT, out)
+    return out
+
+
+def test_a_launched_participant_joins_over_mutual_tls_and_the_recording_is_the_same(certs, over_tcp, tmp_path):
+    """The hub listens on tls/ only and asks for client certificates; the process it launches is
+    given the authority and the hub's certificate in its environment, and so has the hub's rights
+    under access control."""
+    endpoint = tls_endpoint()
+    run_scenario(BELT_PARTICIPANT, tmp_path, {"run.bus": {"listen": [endpoint], "tls": tls_section(certs),
+                                                          "access": {"control": []}}})
+    assert same_files(over_tcp, tmp_path)
+
+
+def test_a_joining_participant_with_its_own_certificate_gives_the_same_recording(certs, over_tcp, tmp_path):
+    """Its certificate's common name, plc, is one access control lets act on the control plane."""
+    scene = tmp_path / "joined.yaml"
+    scene.write_text(BELT_PARTICIPANT.read_text().replace("    command: [python, -m, modules.belt_drive_logic]\n", ""))
+    settings = BusSettings(listen=(tls_endpoint(),), tls=load_scenario(
+        scene, {"run.bus": {"tls": tls_section(certs)}}).run.bus.tls, control=("plc",))
+    with Bus(settings) as bus, hub(scene, tmp_path / "out", {"name": "belt_ramp_participant"}, bus=bus) as master:
+        with process("-m", "modules.belt_drive_logic", "--run", "belt_ramp_participant", "--name", "drive",
+                     "--connect", bus.endpoints[0], "--tls-ca", certs / "ca.pem",
+                     "--tls-cert", certs / "plc.pem", "--tls-key", certs / "plc.key") as proc:
+            master.run()
+            assert output_of(proc)[0] == 0
+    assert same_files(over_tcp, tmp_path / "out")
+
+
+@pytest.mark.parametrize("options, why", [
+    (["--tls-ca", "stranger_ca.pem", "--tls-cert", "plc.pem", "--tls-key", "plc.key"],
+     "its certificate is not signed by the authority in {certs}/stranger_ca.pem "
+     "(unable to get local issuer certificate)"),
+    (["--tls-ca", "ca.pem", "--tls-cert", "intruder.pem", "--tls-key", "intruder.key"],
+     "it does not accept our certificate {certs}/intruder.pem: not signed by an authority it trusts "
+     "(tlsv1_alert_unknown_ca)"),
+], ids=["wrong authority", "certificate of another authority"])
+def test_a_launched_participant_with_the_wrong_certificates_stops_the_run_with_the_reason(certs, tmp_path,
+                                                                                         options, why):
+    """Options on the participant's command line win over what the hub puts in its environment."""
+    endpoint = tls_endpoint()
+    command = ["python", "-m", "modules.belt_drive_logic"] + [
+        str(certs / o) if o.endswith((".pem", ".key")) else o for o in options]
+    with pytest.raises(SimulationError) as info:
+        run_scenario(BELT_PARTICIPANT, tmp_path, {"run.bus": {"listen": [endpoint], "tls": tls_section(certs)},
+                                                  "objects.drive.command": command})
+    message = str(info.value)
+    assert message.startswith("participant 'drive': its process exited with code 1 before it could join")
+    assert (f"planthub participant 'drive': cannot join over TLS; {endpoint} refused the handshake: "
+            f"{why.format(certs=certs)}") in message
+
+
+def test_a_joining_participant_without_a_certificate_is_told_the_hub_wants_one(certs):
+    with Bus(BusSettings(listen=(tls_endpoint(),), tls=TlsSettings(
+            str(certs / "ca.pem"), str(certs / "hub.pem"), str(certs / "hub.key"), mutual=True))) as bus:
+        with process("-m", "modules.belt_drive_logic", "--run", "r", "--name", "drive",
+                     "--connect", bus.endpoints[0], "--tls-ca", certs / "ca.pem") as proc:
+            code, _, err = output_of(proc)
+    assert code == 1
+    assert err.strip() == (f"planthub participant 'drive': cannot join over TLS; {bus.endpoints[0]} refused the "
+                           f"handshake: it asks for a client certificate (mutual TLS) and none was given")
+
+
+def test_a_joining_participant_without_the_authority_is_told_to_give_it(certs):
+    with process("-m", "modules.belt_drive_logic", "--run", "r", "--name", "drive",
+                 "--connect", "tls/127.0.0.1:7447") as proc:
+        code, _, err = output_of(proc)
+    assert code == 2
+    assert err.strip().endswith("error: --connect: tls/127.0.0.1:7447 is a TLS endpoint: give --tls-ca, "
+                                "the authority that signed the hub's certificate")
+
+
+def test_an_operator_command_goes_over_tls(certs, tmp_path):
+    """`planthub send` and the Viewer take the same certificates as a participant."""
+    from hub.live import Viewer
+
+    settings = BusSettings(listen=(tls_endpoint(),), tls=TlsSettings(
+        str(certs / "ca.pem"), str(certs / "hub.pem"), str(certs / "hub.key"), mutual=True))
+    plc = TlsSettings(str(certs / "ca.pem"), str(certs / "plc.pem"), str(certs / "plc.key"), mutual=True)
+    with Bus(settings) as bus, hub(BELT_FMU, tmp_path, bus=bus) as master, \
+            Viewer("belt_ramp_fmu", bus.endpoints, tls=plc) as operator:
+        master.start()
+        ident = operator.command("stop", by="test", wait=None)
+        master.run()
+        assert operator.answer(ident, 5.0)["ok"]
+    assert master.stopped_by.startswith("stopped by an operator")
+
+
+def hub_settings(certs, control=None) -> BusSettings:
+    return BusSettings(listen=(tls_endpoint(),), control=control, tls=TlsSettings(
+        str(certs / "ca.pem"), str(certs / "hub.pem"), str(certs / "hub.key"), mutual=True))
+
+
+def own(certs, name) -> TlsSettings:
+    return TlsSettings(str(certs / "ca.pem"), str(certs / f"{name}.pem"), str(certs / f"{name}.key"), mutual=True)
+
+
+def test_under_access_control_a_certificate_not_named_may_watch_but_not_command(certs, tmp_path):
+    """Zenoh drops what access control denies without a word: the command gets no answer and the
+    run goes to its end, while the samples the HMI watches keep coming."""
+    from hub.errors import PlanthubError
+    from hub.live import Viewer
+
+    with Bus(hub_settings(certs, control=("plc",))) as bus, hub(BELT_FMU, tmp_path, bus=bus) as master, \
+            Viewer("belt_ramp_fmu", bus.endpoints, tls=own(certs, "hmi")) as hmi:
+        master.start()
+        hmi.watch("drive/logic/speed")
+        ident = hmi.command("stop", by="hmi", wait=None)
+        master.run()
+        assert hmi.next(timeout=5.0) is not None
+        with pytest.raises(PlanthubError, match="no answer to command"):
+            hmi.answer(ident, 0.5)
+    assert not master.stopped_by
+    assert not (tmp_path / "commands.csv").exists()
+
+
+def test_under_access_control_a_participant_not_named_cannot_join(certs, tmp_path):
+    scene = tmp_path / "joined.yaml"
+    scene.write_text(BELT_PARTICIPANT.read_text().replace("    command: [python, -m, modules.belt_drive_logic]\n",
+                                                          "    join_timeout: 2\n"))
+    with Bus(hub_settings(certs, control=("plc",))) as bus, hub(scene, bus=bus) as master:
+        with process("-m", "modules.belt_drive_logic", "--run", "joined", "--name", "drive",
+                     "--connect", bus.endpoints[0], "--tls-ca", certs / "ca.pem",
+                     "--tls-cert", certs / "hmi.pem", "--tls-key", certs / "hmi.key") as proc:
+            with pytest.raises(SimulationError, match="participant 'drive' did not join within 2 s"):
+                master.run()
+            code, _, err = output_of(proc)
+    # It saw the hub and the run's state, but its hello went nowhere.
+    assert (code, err) == (1, "planthub participant 'drive': the run stopped before I could join\n")
+
+
+# --- bad set-ups: named, with file and line ------------------------------------------------------
+def scenario_problems(write_scenario, bus: str) -> list[str]:
+    path = write_scenario(f"""
+        planthub: 1
+        run:
+          bus: {bus}
+        objects:
+          c: {{module: constant, type: real, value: 1}}
+        """)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    return [str(p).replace(str(path), "scene.yaml").replace(str(path.parent), "DIR") for p in info.value.problems]
+
+
+def test_a_tls_endpoint_without_certificates_is_named(write_scenario):
+    assert scenario_problems(write_scenario, "{listen: [tls/0.0.0.0:7447], connect: [tls/10.0.0.2:7447]}") == [
+        "scene.yaml:3: run.bus.listen[0]: tls/0.0.0.0:7447 is a TLS endpoint: give the TLS settings with "
+        "a certificate and its key",
+        "scene.yaml:3: run.bus.connect[0]: tls/10.0.0.2:7447 is a TLS endpoint: give the TLS settings with "
+        "the authority (ca) that signed the certificate of the other side"]
+
+
+def test_missing_certificate_files_are_named_relative_to_the_scenario(write_scenario):
+    problems = scenario_problems(write_scenario, """
+            listen: [tls/0.0.0.0:7447]
+            tls: {ca: certs/ca.pem, certificate: certs/hub.pem, key: certs/hub.key}""")
+    assert problems == [
+        "scene.yaml:5: run.bus.tls.ca: no such file: DIR/certs/ca.pem",
+        "scene.yaml:5: run.bus.tls.certificate: no such file: DIR/certs/hub.pem",
+        "scene.yaml:5: run.bus.tls.key: no such file: DIR/certs/hub.key"]
+
+
+def test_incomplete_tls_settings_are_named(write_scenario, certs):
+    problems = scenario_problems(write_scenario, f"""
+            listen: [tls/0.0.0.0:7447]
+            tls:
+              mutual: true
+              key: {certs}/hub.key""")
+    assert problems == [
+        "scene.yaml:5: run.bus.tls.ca: missing: the certificate of the authority that signed the certificates "
+        "(the hub's, and with mutual TLS the participants')",
+        "scene.yaml:5: run.bus.tls.certificate: missing: the key needs its certificate",
+        "scene.yaml:4: run.bus.listen[0]: listening on tls/0.0.0.0:7447 needs a certificate and its key"]
+
+
+def test_files_that_are_not_what_they_should_be_are_named(write_scenario, certs, tmp_path):
+    (tmp_path / "notes.txt").write_text("not a certificate\n")
+    problems = scenario_problems(write_scenario, f"""
+            listen: [tls/0.0.0.0:7447]
+            tls: {{ca: notes.txt, certificate: {certs}/hub.pem, key: {certs}/plc.key}}""")
+    assert problems == [
+        "scene.yaml:5: run.bus.tls.ca: DIR/notes.txt holds no PEM certificate (no '-----BEGIN CERTIFICATE-----' line)",
+        f"scene.yaml:5: run.bus.tls.key: {certs}/plc.key is not the key of the certificate {certs}/hub.pem"]
+
+
+def test_tls_settings_with_no_tls_endpoint_are_named(write_scenario, certs):
+    problems = scenario_problems(write_scenario, f"""
+            listen: [tcp/0.0.0.0:7447]
+            tls: {{ca: {certs}/ca.pem, certificate: {certs}/hub.pem, key: {certs}/hub.key}}""")
+    assert problems == ["scene.yaml:5: run.bus.tls: no endpoint uses it (tcp/0.0.0.0:7447): write tls/HOST:PORT"]
+
+
+def test_access_control_without_mutual_tls_is_named(write_scenario, certs):
+    problems = scenario_problems(write_scenario, f"""
+            listen: [tls/0.0.0.0:7447]
+            tls: {{ca: {certs}/ca.pem, certificate: {certs}/hub.pem, key: {certs}/hub.key}}
+            access: {{control: [plc]}}""")
+    assert problems == ["scene.yaml:6: run.bus.access: access control tells participants apart by their "
+                        "certificates: it needs run.bus.tls with mutual: true"]
+
+
+def test_a_tls_listen_flag_without_tls_settings_cannot_open_the_bus():
+    """`planthub run --listen tls/…` on a scenario without run.bus.tls: the bus says what is missing."""
+    with pytest.raises(BusError) as info:
+        Bus(BusSettings(listen=("tls/127.0.0.1:7447",)))
+    assert str(info.value) == ("cannot open the bus: run.bus.listen[0]: tls/127.0.0.1:7447 is a TLS endpoint: "
+                               "give the TLS settings with a certificate and its key")

@@ -1,0 +1,131 @@
+"""A Python participant in the hub's process (`python: [...]`, `in_process: true`): the same run,
+bit for bit, as the same logic launched as a process on the bus; its faults named as over the bus."""
+import pytest
+
+from hub.errors import PlanthubError, SimulationError
+
+from .helpers import ROOT, run_scenario
+
+SCENARIO = ROOT / "scenarios" / "belt_ramp_participant.yaml"
+LAUNCHED = "command: [python, -m, modules.belt_drive_logic]"
+
+
+def variant(tmp_path, how: str, name: str):
+    text = SCENARIO.read_text()
+    assert LAUNCHED in text
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(text.replace(LAUNCHED, how))
+    return path
+
+
+def test_in_process_gives_the_recording_of_the_launched_participant(tmp_path):
+    # tests.participants.belt_drives `plain` is modules.belt_drive_logic's BeltDrive, with participant(argv)
+    python = f"python: [tests.participants.belt_drives, plain]\n    cwd: {ROOT}"
+    runs = {"command": LAUNCHED, "python": python, "in_process": python + "\n    in_process: true"}
+    recordings = {}
+    for name, how in runs.items():
+        out = tmp_path / name
+        run_scenario(variant(tmp_path, how, name), out)
+        recordings[name] = (out / "recording.csv").read_bytes()
+    assert recordings["in_process"] == recordings["command"] == recordings["python"]
+    speeds = [line.split(",")[1] for line in recordings["in_process"].decode().splitlines()[1:]]
+    assert "0.5" in speeds and speeds[-1] == "0.0"   # it ramped up, and the barrier stopped it
+
+
+def scene(write_scenario, participant: str, extra: str = ""):
+    return write_scenario(f"""
+        planthub: 1
+        run: {{duration: 1.0, physics_rate: 100, communication_step: 0.05}}
+        objects:
+          drive:
+            module: participant
+            inputs: {{run: bool, speed_setpoint: real}}
+            outputs: {{speed: real, running: bool}}
+            parameters: {{fail_at: 0.5}}
+            python: {participant}
+            in_process: true
+            cwd: {ROOT}
+{extra}
+        """)
+
+
+def test_an_exception_in_its_step_stops_the_run_naming_it(write_scenario):
+    with pytest.raises(SimulationError) as info:
+        run_scenario(scene(write_scenario, "[tests.participants.belt_drives, fails]"))
+    assert str(info.value).startswith(
+        "participant 'drive' (in-process) failed in its step at t = 0.5 s: ZeroDivisionError: asked to fail at "
+        "t = 0.5 s")
+
+
+def test_an_output_of_the_wrong_type_is_named(write_scenario):
+    with pytest.raises(SimulationError) as info:
+        run_scenario(scene(write_scenario, "[tests.participants.belt_drives, ints]"))
+    assert str(info.value).startswith(
+        "participant 'drive' (in-process) gave a bad output in its step at t = 0 s: output 'running': "
+        "expected a bool, got 0")
+
+
+def test_a_module_that_does_not_import_is_named(write_scenario):
+    with pytest.raises(SimulationError) as info:
+        run_scenario(scene(write_scenario, "[tests.participants.no_such_thing]"))
+    assert str(info.value) == ("participant 'drive' (in-process): cannot import Python module "
+                               "'tests.participants.no_such_thing': No module named 'tests.participants.no_such_thing'")
+
+
+def test_a_module_without_a_participant_function_is_named(write_scenario):
+    with pytest.raises(SimulationError) as info:
+        run_scenario(scene(write_scenario, "[tests.participants.echo]"))
+    assert str(info.value) == ("participant 'drive' (in-process): module 'tests.participants.echo' has no "
+                               "function participant(argv) that makes its logic")
+
+
+def test_logic_that_does_not_fit_the_scenario_is_named(write_scenario):
+    path = write_scenario(f"""
+        planthub: 1
+        run: {{duration: 1.0, physics_rate: 100}}
+        objects:
+          control:
+            module: participant
+            inputs: {{r1_read: void, r1_destination: int}}
+            outputs: {{sw1_work: void}}
+            python: [modules.plant_control, --lanes, A]
+            in_process: true
+        """)
+    with pytest.raises(SimulationError) as info:
+        run_scenario(path)
+    assert str(info.value) == (
+        "participant 'control' (in-process) does not fit the scenario: its input 'r1_destination' is string, "
+        "the scenario's is int; its output 'sw1_base' (void) is not in the scenario (known: sw1_work)")
+
+
+def test_python_and_command_together_are_refused(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        run: {duration: 1.0, physics_rate: 100}
+        objects:
+          drive:
+            module: participant
+            inputs: {run: bool}
+            python: [modules.belt_drive_logic]
+            command: [python, -m, modules.belt_drive_logic]
+        """)
+    with pytest.raises(PlanthubError) as info:
+        run_scenario(path)
+    assert f"{path}:7: objects.drive.python: give `command` (any program) or `python` (a Python module), not both" \
+        in str(info.value)
+
+
+def test_in_process_without_a_python_module_is_refused(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        run: {duration: 1.0, physics_rate: 100}
+        objects:
+          drive:
+            module: participant
+            inputs: {run: bool}
+            in_process: true
+        """)
+    with pytest.raises(PlanthubError) as info:
+        run_scenario(path)
+    assert "objects.drive.in_process: only a Python participant (`python: [MODULE, ...]`) runs in-process" \
+        in str(info.value)
