@@ -197,6 +197,9 @@ def main() -> int:
 
     bus_lockstep()
     data_plane()
+    from .bench_bottling import bottling_plant   # the whole plant, 100 bottles on the line
+
+    bottling_plant()
     return 0
 
 
