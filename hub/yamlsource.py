@@ -49,6 +49,13 @@ class _Reader:
             out = {}
             for key_node, value_node in node.value:
                 key = self._scalars.construct_object(key_node)
+                if not isinstance(key, str) and isinstance(key_node, yaml.ScalarNode):
+                    # Every key of a scenario is a name; YAML 1.1 reads `off`, `yes`, `null`, `12` otherwise.
+                    self.problems.append(Problem(
+                        self.file, key_node.start_mark.line + 1, format_path(path + (key_node.value,)),
+                        f"YAML reads the name {key_node.value} as {_kind(key)} {key!r}: "
+                        f"write it in quotes ('{key_node.value}')"))
+                    key = key_node.value
                 if key in out:
                     first = self.lines[path + (key,)]
                     self.problems.append(Problem(
@@ -60,6 +67,14 @@ class _Reader:
         if isinstance(node, yaml.SequenceNode):
             return [self.value(item, path + (i,)) for i, item in enumerate(node.value)]
         return self._scalars.construct_object(node)
+
+
+def _kind(value) -> str:
+    if isinstance(value, bool):
+        return "the boolean"
+    if value is None:
+        return "the empty value"
+    return f"the {type(value).__name__}"
 
 
 def format_path(path: tuple) -> str:

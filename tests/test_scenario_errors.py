@@ -43,6 +43,22 @@ def test_duplicate_object_names(write_scenario):
     assert found == [f"{path}:4: objects.belt: duplicate name 'belt' (first defined at line 3)"]
 
 
+def test_a_name_yaml_reads_as_a_boolean_is_named_and_checked_as_the_name(write_scenario):
+    """YAML 1.1 reads an unquoted `off` as false: said so, and the name still checks as written."""
+    path = write_scenario("""
+        planthub: 1
+        objects:
+          off: {module: constant, type: bool, value: true}
+          b: {module: constant, type: bool, value: true}
+        flows:
+          - {from: of.value.out, to: b.value.set, when: target}
+        """)
+    found, _ = problems(path)
+    assert found == [
+        f"{path}:3: objects.off: YAML reads the name off as the boolean False: write it in quotes ('off')",
+        f"{path}:6: flows[0].from: unknown object 'of' in 'of.value.out' (did you mean 'off'?)"]
+
+
 def test_duplicate_bottle_ids(write_scenario):
     path = write_scenario("""
         planthub: 1
