@@ -129,3 +129,21 @@ def test_in_process_without_a_python_module_is_refused(write_scenario):
         run_scenario(path)
     assert "objects.drive.in_process: only a Python participant (`python: [MODULE, ...]`) runs in-process" \
         in str(info.value)
+
+
+def test_arguments_the_module_rejects_are_named(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        run: {duration: 1.0, physics_rate: 100}
+        objects:
+          control:
+            module: participant
+            inputs: {r1_read: void, r1_destination: string}
+            outputs: {sw1_work: void, sw1_base: void}
+            python: [modules.plant_control]
+            in_process: true
+        """)
+    with pytest.raises(SimulationError) as info:
+        run_scenario(path)
+    assert str(info.value) == ("participant 'control' (in-process): modules.plant_control.participant([]) "
+                               "rejected its arguments (exit status 2)")
