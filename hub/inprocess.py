@@ -13,7 +13,7 @@ import importlib
 import traceback
 
 from .errors import PlanthubError, SimulationError
-from .lockstep import RemoteSpec, _misfit
+from .lockstep import RemoteSpec, misfit
 from . import wire
 
 FACTORY = "participant"
@@ -47,7 +47,7 @@ class InProcessSlave:
             inputs, outputs = logic.interface()
         except PlanthubError as exc:
             raise SimulationError(f"{where}: {exc}") from exc
-        problems = _misfit(spec, inputs, outputs)
+        problems = misfit(spec, inputs, outputs)
         if problems:
             raise SimulationError(f"{where} does not fit the scenario: " + "; ".join(problems))
         # Inputs are set by name; outputs come back in the logic's order, as the bus maps them by name.

@@ -342,7 +342,7 @@ class Lockstep:
             else:
                 self._welcome(name, ident, error=f"participant {name!r} is already on the bus (id {peer.id})")
             return
-        problems = _misfit(peer.slave.spec, inputs, outputs)
+        problems = misfit(peer.slave.spec, inputs, outputs)
         if problems:
             error = f"{peer.slave.spec.label} does not fit the scenario: " + "; ".join(problems)
             self._welcome(name, ident, error=error)
@@ -435,7 +435,7 @@ class Lockstep:
                 self._token.undeclare()
 
 
-def _misfit(spec: RemoteSpec, inputs, outputs) -> list[str]:
+def misfit(spec: RemoteSpec, inputs, outputs) -> list[str]:
     """Differences between what the scenario expects and what a participant announced."""
     problems = []
     for label, want, have in (("input", spec.inputs, inputs), ("output", spec.outputs, outputs)):

@@ -50,13 +50,13 @@ class RunSummary:
                f"communication step {1000 * self.substeps / rate:.4g} ms)"]
         if self.wall_seconds is not None:
             out.append(f"  wall time    {self.wall_seconds:.3f} s  (real-time factor {self.realtime_factor:.1f}×)")
+        if self.plant is not None:   # a plant engineer's figures first, the event table after them
+            out += plant_lines(self.plant)
         out.append(f"  events       {sum(s.count for s in self.events.values())}")
         width = max((len(k) for k in self.events), default=0)
         for slot, stats in self.events.items():
             detail = f"  ({stats.first_detail})" if stats.first_detail else ""
             out.append(f"    {slot:<{width}}  {stats.count:>4}×  first at {stats.first_tick / rate:.4f} s{detail}")
-        if self.plant is not None:
-            out += plant_lines(self.plant)
         if self.out is not None:
             out += [f"  recording    {self.out / 'recording.csv'}  ({self.recorded} slots)",
                     f"  event log    {self.out / 'events.csv'}",

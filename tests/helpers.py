@@ -1,6 +1,9 @@
 """Helpers for tests: run a scenario file end to end."""
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
 from pathlib import Path
 
 from hub.master import Master
@@ -22,3 +25,12 @@ def run_scenario(path, out: Path | None = None, overrides: dict | None = None):
         finally:
             recorder.close()
     return scenario, recorder, result
+
+
+def planthub_run(scenario, out: Path, *sets: str):
+    """`planthub run SCENARIO --out OUT --set …` in a process of its own; (stdout, summary.json)."""
+    args = [a for s in sets for a in ("--set", s)]
+    proc = subprocess.run([sys.executable, "-m", "hub", "run", str(scenario), "--out", str(out), *args],
+                          capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr
+    return proc.stdout, json.loads((out / "summary.json").read_text())

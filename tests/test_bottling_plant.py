@@ -4,14 +4,13 @@ tips, falls, speeds or passes a closed gate, and nothing jams; routing by the pl
 participant over Zenoh gives the run of the same logic in-process, bit for bit; a participant
 with two lanes swapped makes `planthub test` fail naming the misrouted bottles."""
 import csv
-import json
 import subprocess
 import sys
 
 from hub.scenario import load_scenario
 from modules.source import Source
 
-from .helpers import ROOT, run_scenario
+from .helpers import ROOT, planthub_run, run_scenario
 from .plant_watch import run_watched
 
 SCENARIO = ROOT / "scenarios" / "bottling_plant.yaml"
@@ -54,17 +53,14 @@ def test_bottles_reach_their_destinations_soundly(tmp_path):
 
 
 def test_the_run_summary_counts_what_the_event_log_shows_and_finds_no_jam(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "hub", "run", str(SCENARIO), "--set", "run.duration=45",
-                           "--set", "objects.control.in_process=true", "--out", str(tmp_path)],
-                          capture_output=True, text=True, cwd=ROOT)
-    assert proc.returncode == 0, proc.stdout + proc.stderr
-    plant = json.loads((tmp_path / "summary.json").read_text())["plant"]
+    stdout, summary = planthub_run(SCENARIO, tmp_path, "run.duration=45", "objects.control.in_process=true")
+    plant = summary["plant"]
     taken, _ = deliveries(load_scenario(SCENARIO), tmp_path)
     released = [e for e in rows(tmp_path / "events.csv") if e["slot"].endswith(".store.released")]
     assert plant["bottles_in"] == len(released) >= 60   # the magazine fills at the start
     assert plant["delivered"] == len(taken) > 0
     assert plant["misrouted"] == [] and plant["jams"] == []
-    assert "  misrouted    none" in proc.stdout and "  jams         none" in proc.stdout
+    assert "  misrouted    none" in stdout and "  jams         none" in stdout
 
 
 def test_routing_over_the_bus_gives_the_in_process_run_bit_for_bit(tmp_path):

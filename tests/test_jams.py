@@ -3,31 +3,19 @@
     jam.yaml:            source ──► [==== feed ====]● ║ cross      P1 stands at the cross belt's rail
     stopper_queue.yaml:  source ──► [== belt ==●●●|stop|====] ──► sink    held 4 s, then let go
 """
-import json
-import subprocess
-import sys
-
 import pytest
 
 from hub import Simulation
 from hub.jams import JamWatch
 
-from .helpers import ROOT
+from .helpers import ROOT, planthub_run
 
 JAM = ROOT / "scenarios" / "jam.yaml"
 STOPPER = ROOT / "scenarios" / "stopper_queue.yaml"
 
 
-def run_cli(scenario, out, *sets):
-    args = [a for s in sets for a in ("--set", s)]
-    proc = subprocess.run([sys.executable, "-m", "hub", "run", str(scenario), "--out", str(out), *args],
-                          capture_output=True, text=True, cwd=ROOT)
-    assert proc.returncode == 0, proc.stderr
-    return proc.stdout, json.loads((out / "summary.json").read_text())
-
-
 def test_a_bottle_against_a_rail_on_a_running_belt_is_a_jam(tmp_path):
-    stdout, summary = run_cli(JAM, tmp_path)
+    stdout, summary = planthub_run(JAM, tmp_path)
     plant = summary["plant"]
     (jam,) = plant["jams"]
     # P1 leaves the source at 0.04 m and meets the rail at 0.975 m: about 1.9 s at 0.5 m/s.
@@ -56,7 +44,7 @@ def test_a_jam_ends_when_its_belt_stops(write_scenario, tmp_path):
           - {from: stop_feed.clock.fire, to: halt.value.set}
           - {from: halt.value.out, to: feed.drive.run}
         """)
-    _, summary = run_cli(path, tmp_path)
+    _, summary = planthub_run(path, tmp_path)
     (jam,) = summary["plant"]["jams"]
     assert jam["bottle"] == "P1" and 4.5 <= jam["until"] <= 4.6   # the first look after the stop
     assert jam["seconds"] == pytest.approx(jam["until"] - jam["since"])
@@ -76,8 +64,8 @@ def test_bottles_a_closed_stopper_holds_are_no_jam_however_long():
 
 
 def test_equal_runs_give_equal_summaries_and_the_api_agrees_with_the_cli(tmp_path):
-    _, first = run_cli(JAM, tmp_path / "a")
-    _, second = run_cli(JAM, tmp_path / "b")
+    _, first = planthub_run(JAM, tmp_path / "a")
+    _, second = planthub_run(JAM, tmp_path / "b")
     for summary in (first, second):
         del summary["wall"], summary["files"]
     assert first == second

@@ -1,8 +1,6 @@
 """The plant part of the run summary: bottles in, delivered per sink and destination, misrouted, on the line, throughput — printed, in summary.json and from the Python API."""
 import csv
 import json
-import subprocess
-import sys
 
 import pytest
 
@@ -11,17 +9,9 @@ from hub.errors import ScenarioError
 from hub.scenario import load_scenario
 from modules.source import Source
 
-from .helpers import ROOT
+from .helpers import ROOT, planthub_run
 
 SOURCE_SINK = ROOT / "scenarios" / "source_sink.yaml"
-
-
-def planthub_run(scenario, out, *sets):
-    args = [a for s in sets for a in ("--set", s)]
-    proc = subprocess.run([sys.executable, "-m", "hub", "run", str(scenario), "--out", str(out), *args],
-                          capture_output=True, text=True, cwd=ROOT)
-    assert proc.returncode == 0, proc.stderr
-    return proc.stdout, json.loads((out / "summary.json").read_text())
 
 
 def taken(out):
