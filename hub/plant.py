@@ -16,7 +16,7 @@ class Plant:
 
     def __init__(self, scenario: Scenario):
         self.scenario = scenario
-        self.world = PhysicsWorld(scenario.run.physics_rate)
+        self.world = PhysicsWorld(scenario.run.physics_rate, sleep_after=scenario.run.sleep_after)
         self.world.seed = scenario.run.seed   # for modules that draw at build time (a source's destinations)
         try:
             self.objects: dict[str, DynamicObject] = {}

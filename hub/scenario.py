@@ -65,6 +65,7 @@ class RunSettings:
     event_driven: bool = False   # a trigger event ends the communication step at its tick
     master: str = "jacobi"       # or "gauss-seidel": how logic components step (hub/gauss_seidel.py)
     jam_after: float = 5.0       # s a bottle stands still on a running belt, not held at a gate, to be jammed (hub/jams.py)
+    sleep_after: float = 0.1     # s a bottle stands still where nothing drives it before it rests (hub/physics/rest.py); 0: never
     bus: BusSettings | None = None   # None: no `run.bus` section
 
     @property
@@ -254,6 +255,8 @@ class _Checker:
             event_driven=run.get("event_driven") is True,
             master=run.get("master") if run.get("master") in ("jacobi", "gauss-seidel") else "jacobi",
             jam_after=float(setting("jam_after", 5.0)),
+            sleep_after=float(run["sleep_after"]) if type(run.get("sleep_after")) in (int, float)
+            and run["sleep_after"] >= 0 else 0.1,
             bus=self.bus_settings(run["bus"]) if isinstance(run.get("bus"), dict) else None)
 
     def bus_settings(self, section: dict) -> BusSettings:

@@ -1,35 +1,43 @@
 """`make bench`, the bottling plant: cost per tick with 100 bottles on the line at 150 Hz, beside
-bare pybullet stepping of the same scene, with the routing logic in the hub and over Zenoh.
+bare pybullet stepping of the same scene, with the routing logic in the hub and over Zenoh, with
+bottles at rest left asleep (the default, hub/physics/rest.py) and without; and what leaving
+them asleep changes in the plant's deliveries.
 
 From 100 s to 110 s of scenarios/bottling_plant.yaml about 100 bottles are on the line (95–101
-from 80 s to 125 s; most of them stand in the magazine's queue): the hub steps that window with everything (fields,
-triggers, 8 logic FMUs, the plant-management logic, the flows), then bare pybullet steps the
-same bodies as many ticks from where the hub left them. Medians of 3, measured alternately.
+from 80 s to 125 s; most of them stand in the magazine's queue, which stops while a bottle waits
+at the separator): the hub steps that window with everything (fields, triggers, 8 logic FMUs,
+the plant-management logic, the flows), then bare pybullet steps the same bodies as many ticks
+from where the hub left them, asleep where the hub left them asleep. Medians of 3, measured
+alternately.
 """
 from __future__ import annotations
 
 import statistics
 import time
 
+import numpy as np
+
 from hub.master import Master
 from hub.plant import Plant
 from hub.recorder import Recorder
 from hub.scenario import load_scenario
+from modules.sink import Bin
 
 from .helpers import ROOT
 
 PLANT = ROOT / "scenarios" / "bottling_plant.yaml"
 WINDOW = (100.0, 110.0)
 REPEATS = 3
+COMPARED = 150.0    # s of the plant run with and without rest for the deliveries
 
 
 def on_line(world) -> int:
     return int((world.positions[:, 2] > -50.0).sum())   # parked and delivered bodies wait 100 m down
 
 
-def window(in_process: bool) -> tuple[float, float, str]:
-    """(hub s, bare pybullet s, bottles on the line at the window's start–end)."""
-    scenario = load_scenario(PLANT, {"objects.control.in_process": in_process})
+def window(in_process: bool, sleep_after: float) -> tuple[float, float, str, float]:
+    """(hub s, bare pybullet s, bottles on the line at the window's start–end, mean resting)."""
+    scenario = load_scenario(PLANT, {"objects.control.in_process": in_process, "run.sleep_after": sleep_after})
     rate = scenario.run.physics_rate
     start, end = (round(t * rate) for t in WINDOW)
     with Plant(scenario) as plant:
@@ -38,33 +46,67 @@ def window(in_process: bool) -> tuple[float, float, str]:
             master.run(until_tick=start)
             world = plant.world
             first = on_line(world)
+            resting = []
             began = time.perf_counter()
-            master.run(until_tick=end)
+            for tick in range(start, end, 150):     # a look each second: 10 of 1500 ticks
+                master.run(until_tick=tick + 150)
+                resting.append(int(world.rest.resting.sum()))
             hub = time.perf_counter() - began
             count = f"{first}–{on_line(world)}"
         began = time.perf_counter()
         world.step_engine_only(end - start)
         bare = time.perf_counter() - began
-    return hub, bare, count
+    return hub, bare, count, statistics.mean(resting)
+
+
+def deliveries(sleep_after: float) -> tuple[dict[str, tuple[str, float]], float]:
+    """{bottle: (sink, time)} over the first COMPARED seconds, and the wall time."""
+    scenario = load_scenario(PLANT, {"objects.control.in_process": True, "run.sleep_after": sleep_after,
+                                     "run.duration": COMPARED})
+    rate = scenario.run.physics_rate
+    with Plant(scenario) as plant:
+        with Master(plant, Recorder([], rate)) as master:
+            began = time.perf_counter()
+            master.run()
+            wall = time.perf_counter() - began
+        sinks = [c for c in plant.components if isinstance(c, Bin)]
+        taken = {d.bottle: (sink.obj, d.tick / rate) for sink in sinks for d in sink.deliveries}
+    return taken, wall
 
 
 def bottling_plant() -> None:
     print(f"\n## The bottling plant at 150 Hz with 100 bottles on the line ({WINDOW[0]:g}–{WINDOW[1]:g} s)\n")
-    print("| routing logic | bottles on the line | hub µs/tick | bare pybullet µs/tick | hub / bare "
-          "| hub real-time factor | bare real-time factor |")
-    print("|---|---:|---:|---:|---:|---:|---:|")
+    print("| bottles at rest | routing logic | bottles on the line | of them asleep (mean) | hub µs/tick "
+          "| bare pybullet µs/tick | hub / bare | hub real-time factor | bare real-time factor |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|")
     ticks = round((WINDOW[1] - WINDOW[0]) * 150)
-    samples = {True: [], False: []}
+    cases = ((0.1, True, "asleep (default)", "in the hub"), (0.1, False, "asleep (default)", "over Zenoh"),
+             (0.0, True, "awake (`sleep_after: 0`)", "in the hub"))
+    samples = {case: [] for case in cases}
     for _ in range(REPEATS):
-        for in_process in (True, False):
-            samples[in_process].append(window(in_process))
-    for in_process, label in ((True, "in the hub"), (False, "participant over Zenoh")):
-        hub = statistics.median(s[0] for s in samples[in_process])
-        bare = statistics.median(s[1] for s in samples[in_process])
-        count = samples[in_process][0][2]
-        sim = WINDOW[1] - WINDOW[0]
-        print(f"| {label} | {count} | {1e6 * hub / ticks:.0f} | {1e6 * bare / ticks:.0f} | {hub / bare:.2f} "
-              f"| {sim / hub:.1f}× | {sim / bare:.1f}× |")
+        for case in cases:
+            samples[case].append(window(case[1], case[0]))
+    sim = WINDOW[1] - WINDOW[0]
+    for case in cases:
+        hub = statistics.median(s[0] for s in samples[case])
+        bare = statistics.median(s[1] for s in samples[case])
+        count, resting = samples[case][0][2], statistics.median(s[3] for s in samples[case])
+        print(f"| {case[2]} | {case[3]} | {count} | {resting:.0f} | {1e6 * hub / ticks:.0f} | {1e6 * bare / ticks:.0f} "
+              f"| {hub / bare:.2f} | {sim / hub:.1f}× | {sim / bare:.1f}× |")
+
+    print(f"\n### What rest changes: the first {COMPARED:g} s, routing in the hub\n")
+    asleep, wall_asleep = deliveries(0.1)
+    awake, wall_awake = deliveries(0.0)
+    both = sorted(set(asleep) & set(awake))
+    shift = np.array([asleep[b][1] - awake[b][1] for b in both])
+    same_sink = sum(asleep[b][0] == awake[b][0] for b in both)
+    print("| bottles at rest | delivered | wall s | real-time factor |")
+    print("|---|---:|---:|---:|")
+    print(f"| asleep | {len(asleep)} | {wall_asleep:.1f} | {COMPARED / wall_asleep:.1f}× |")
+    print(f"| awake | {len(awake)} | {wall_awake:.1f} | {COMPARED / wall_awake:.1f}× |")
+    print(f"\nDelivered in both: {len(both)}, to the same sink: {same_sink}; delivery time asleep − awake: "
+          f"median {np.median(shift):+.3f} s, mean |Δ| {np.abs(shift).mean():.3f} s, "
+          f"largest {shift[np.argmax(np.abs(shift))]:+.3f} s.")
 
 
 if __name__ == "__main__":

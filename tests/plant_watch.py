@@ -67,9 +67,11 @@ class Watch:
 
 
 def run_watched(path, out: Path | None = None, overrides: dict | None = None):
-    """Load, build and run a scenario under a Watch; return (scenario, recorder, watch)."""
+    """Load, build and run a scenario under a Watch; return (scenario, recorder, watch). The
+    world compares every resting bottle with the engine at every tick (PhysicsWorld.check_rest)."""
     scenario = load_scenario(path, overrides)
     with Plant(scenario) as plant:
+        plant.world.check_rest = True
         columns = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
         recorder = Recorder(columns, scenario.run.physics_rate, out)
         watch = Watch(plant)

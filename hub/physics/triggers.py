@@ -33,6 +33,7 @@ class VolumeTriggers:
         self._inside = np.zeros((0, 0), bool)
         self._stayed = np.zeros(0, bool)      # per trigger: something was inside since the last take
         self._occupants = None                # per trigger: the bodies inside now, worked out once per change
+        self.shifted: set[int] = set()        # boxes moved since the last evaluation (see `move`)
 
     def __len__(self) -> int:
         return len(self.boxes)
@@ -46,19 +47,30 @@ class VolumeTriggers:
         return index
 
     def evaluate(self, tick: int, positions: np.ndarray, radii: np.ndarray, half_heights: np.ndarray,
-                 rows: np.ndarray | None = None) -> bool:
+                 rows: np.ndarray | None = None, moved: np.ndarray | None = None) -> bool:
         """Compare occupancy with the previous tick and latch the changes; True if there was one.
         `rows`: the bodies that can be inside anything (the others, parked off stage, are not).
+        `moved`: the only bodies that can have moved since the last evaluation (the others, at
+        rest, keep their occupancy); None: any of `rows`.
 
         Runs at every tick: written on (triggers, bodies) arrays per coordinate, which costs half
         of the same test on (triggers, bodies, 3) arrays with einsum."""
         if len(self) == 0:
             return False
-        if rows is not None:
+        if moved is not None and self._inside.shape == (len(self), len(positions)):
+            inside = self._inside.copy()
+            inside[:, moved] = self._test(positions[moved], radii[moved], half_heights[moved])
+            if self.shifted:   # a box that moved (with an arm's tool) tests every body in play
+                shifted = sorted(self.shifted)
+                every = slice(None) if rows is None else rows
+                inside[np.ix_(shifted, np.arange(len(positions))[every])] = self._test(
+                    positions[every], radii[every], half_heights[every], shifted)
+        elif rows is not None:
             inside = np.zeros((len(self), len(positions)), bool)
             inside[:, rows] = self._test(positions[rows], radii[rows], half_heights[rows])
         else:
             inside = self._test(positions, radii, half_heights)
+        self.shifted.clear()
         previous = self._inside
         self._inside = inside
         self._stayed |= inside.any(axis=1)
@@ -76,16 +88,22 @@ class VolumeTriggers:
             self.latches[t].left.append((tick, int(n)))
         return True
 
-    def _test(self, positions, radii, half_heights) -> np.ndarray:
-        """(triggers, bodies): whether each upright cylinder overlaps each box."""
+    def _test(self, positions, radii, half_heights, boxes=slice(None)) -> np.ndarray:
+        """(triggers, bodies): whether each upright cylinder overlaps each box (or those of `boxes`)."""
         b = self.boxes
-        dx = positions[:, 0] - b.centers[:, 0, None]
-        dy = positions[:, 1] - b.centers[:, 1, None]
-        c, s = b.cos[:, None], b.sin[:, None]
-        gx = np.maximum(np.abs(c * dx + s * dy) - b.half_extents[:, 0, None], 0.0)
-        gy = np.maximum(np.abs(c * dy - s * dx) - b.half_extents[:, 1, None], 0.0)
+        centers, half_extents = b.centers[boxes], b.half_extents[boxes]
+        dx = positions[:, 0] - centers[:, 0, None]
+        dy = positions[:, 1] - centers[:, 1, None]
+        c, s = b.cos[boxes, None], b.sin[boxes, None]
+        gx = np.maximum(np.abs(c * dx + s * dy) - half_extents[:, 0, None], 0.0)
+        gy = np.maximum(np.abs(c * dy - s * dx) - half_extents[:, 1, None], 0.0)
         return ((gx * gx + gy * gy <= radii * radii)
-                & (np.abs(positions[:, 2] - b.centers[:, 2, None]) <= b.half_extents[:, 2, None] + half_heights))
+                & (np.abs(positions[:, 2] - centers[:, 2, None]) <= half_extents[:, 2, None] + half_heights))
+
+    def move(self, trigger: int, center) -> None:
+        """Put a box's centre elsewhere (a gripper's trigger follows the tool)."""
+        self.boxes.centers[trigger] = center
+        self.shifted.add(trigger)
 
     def take(self, trigger: int) -> Latch:
         """Hand over what the trigger latched and start a new latch with the current occupancy."""

@@ -14,6 +14,7 @@ with quiet_stderr():
 from . import supports
 from .fields import ForceFields
 from .frames import Arc, Pose, Straight, base_points
+from .rest import Rest, boxes
 from .robot import KinematicArm
 from .triggers import Latch, VolumeTriggers
 
@@ -54,7 +55,8 @@ class PhysicsWorld:
     MAXIMAL = True
     SOLVER_ITERATIONS = 20
 
-    def __init__(self, rate: int, gravity: float = -9.81, solver_iterations: int | None = None):
+    def __init__(self, rate: int, gravity: float = -9.81, solver_iterations: int | None = None,
+                 sleep_after: float = 0.1):
         solver_iterations = solver_iterations or self.SOLVER_ITERATIONS
         self.rate = rate
         self.dt = 1.0 / rate
@@ -74,10 +76,18 @@ class PhysicsWorld:
         # Plant elements (see park, add_switchable_boxes, add_arm).
         self.seed = 0                           # the scenario's run.seed, for modules that draw at build time
         self._parked: set[int] = set()
-        self._live_rows = None                  # rows read per tick when some bodies are parked
+        self.rest = Rest(rate, sleep_after)     # bodies the engine leaves asleep (rest.py)
+        self.check_rest = False                 # compare resting bodies with the engine at every tick (tests)
+        self._full_read = True                  # the next read takes every body (after a park or unpark)
+        self._rows_stale = True                 # the sets below need working out again
+        self._live_rows = None                  # rows read per tick: in play and awake (None: every body)
         self._live_ids: list[int] = []
+        self._play_rows = None                  # rows in play, not parked (None: every body)
+        self._under = None                      # the field under each live row at the last read (−1: none)
         self._switchable: list[int] = []
+        self._switchable_boxes: list[tuple] = []  # each part's bounding box (lo, hi), for waking what rests in it
         self.arms: list[KinematicArm] = []
+        self._held: dict[KinematicArm, int] = {}   # arm → the body it grips (never rests)
         self._following: list[tuple[int, KinematicArm, np.ndarray]] = []   # (trigger, arm, offset)
         self._bodies: list[int] = []
         self.labels: list[str] = []
@@ -129,6 +139,7 @@ class PhysicsWorld:
         )
         self._bodies.append(body)
         self.labels.append(label)
+        self.rest.add(False, radius, height / 2.0)   # a one-link multibody: Bullet's sleeping differs there
         self.masses = np.append(self.masses, mass)
         self.radii = np.append(self.radii, radius)
         self.half_heights = np.append(self.half_heights, height / 2.0)
@@ -144,6 +155,9 @@ class PhysicsWorld:
         return self.fields.add(center, half_extents, yaw, k, speed)
 
     def set_field_speed(self, field: int, speed: float) -> None:
+        """A belt's speed; bodies resting on it wake when it changes."""
+        if speed != self.fields.speeds[field] and self.rest.resting.any():
+            self._wake(self.rest.on_field(field, self.positions))
         self.fields.set_speed(field, speed)
 
     def add_trigger(self, center, half_extents, yaw: float = 0.0) -> int:
@@ -236,6 +250,8 @@ class PhysicsWorld:
             self._base_bodies[index] = second
         self._bodies.append(body)
         self.labels.append(label)
+        # Rests only as a plain rigid body whose box rest.boxes knows (no hull, no second body).
+        self.rest.add(self.MAXIMAL and hull is None and grip_at != "base_body", radius, half)
         self.masses = np.append(self.masses, mass)
         self.radii = np.append(self.radii, radius)
         self.half_heights = np.append(self.half_heights, half)
@@ -254,13 +270,14 @@ class PhysicsWorld:
         worked out (its base, or its second body's state read), so a bottle off every belt
         costs no more at any level of detail.
         """
-        rows = self._live_rows           # parked bodies are on no belt: not even looked for
+        if self._rows_stale:
+            self._refresh_rows()
+        rows = self._live_rows           # parked and resting bodies are not even looked for
+        field = self._under if self._under is not None else self._fields_under(rows)
         if rows is None:
-            field = self.fields.which(self.positions)
             bodies = np.flatnonzero(field >= 0)
             f = field[bodies]
         else:
-            field = self.fields.which(self.positions[rows])
             on = field >= 0
             bodies, f = rows[on], field[on]
         if len(bodies) == 0:
@@ -310,13 +327,18 @@ class PhysicsWorld:
         body = self._boxes_body(centers, half_extents, yaws)
         self._frictionless(body)
         self._switchable.append(body)
+        self._switchable_boxes.append(self._call(pybullet.getAABB, body))
         self.set_solid(len(self._switchable) - 1, solid)
         return len(self._switchable) - 1
 
     def set_solid(self, part: int, solid: bool) -> None:
         """Collision on or off through the body's filter group and mask: one call whatever the
         number of bottles (setCollisionFilterPair needs one per bottle), 0.8 µs, in effect from
-        the next tick in both directions (measured). On: pybullet's own values for a fixed body."""
+        the next tick in both directions (measured). On: pybullet's own values for a fixed body.
+        A fixed body wakes no sleeping one: bodies resting in its box are woken here."""
+        if self.rest.resting.any():
+            lo, hi = (np.asarray(v, float) for v in self._switchable_boxes[part])
+            self._wake(self.rest.joining([(lo + hi) / 2.0], [(hi - lo) / 2.0], self.positions))
         group, mask = (2, -3) if solid else (0, 0)
         self._call(pybullet.setCollisionFilterGroupMask, self._switchable[part], -1, group, mask)
 
@@ -333,7 +355,8 @@ class PhysicsWorld:
             self._call(pybullet.changeDynamics, b, -1, activationState=pybullet.ACTIVATION_STATE_ENABLE_SLEEPING)
             self._call(pybullet.changeDynamics, b, -1, activationState=pybullet.ACTIVATION_STATE_SLEEP)
         self._parked.add(body)
-        self._live_rows = None
+        self.rest.forget(body)
+        self._moved()
 
     def unpark(self, body: int, base) -> None:
         """Put a parked body back into play, upright and at rest, standing on `base`."""
@@ -345,7 +368,13 @@ class PhysicsWorld:
             self._call(pybullet.changeDynamics, b, -1, activationState=pybullet.ACTIVATION_STATE_WAKE_UP)
             self._call(pybullet.changeDynamics, b, -1, activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING)
         self._parked.discard(body)
-        self._live_rows = None
+        self.rest.forget(body)
+        if self.rest.resting.any():
+            # The state arrays learn where it stands at the next read; what rests near it wakes now.
+            centre = (base[0], base[1], base[2] + self.half_heights[body])
+            upright = boxes(np.array([(0.0, 0.0, 0.0, 1.0)]), self.radii[[body]], self.half_heights[[body]])
+            self._wake(self.rest.joining([centre], upright, self.positions))
+        self._moved()
 
     def is_parked(self, body: int) -> bool:
         return body in self._parked
@@ -354,8 +383,8 @@ class PhysicsWorld:
         """Read-only, for statistics beside the loop (hub/jams.py): the bodies in play (not
         parked), the force field each one's centre of mass lies in (−1: none) and that field's
         speed now, m/s. From the state read at the last tick; nothing is asked of the engine."""
-        rows = self._live_rows
-        if rows is None:   # nothing parked, or the parked set changed since the last read
+        rows = self._play_rows
+        if rows is None or self._rows_stale:
             rows = np.array([n for n in range(len(self._bodies)) if n not in self._parked], dtype=int)
         field, _, _ = self.fields.locate(self.positions[rows])
         return rows, field, np.where(field >= 0, self.fields.speeds[field], 0.0)
@@ -375,22 +404,27 @@ class PhysicsWorld:
     def follow(self, trigger: int, arm: KinematicArm, offset) -> None:
         """Make a volume trigger move with the arm's tool (the paper's gripper trigger)."""
         self._following.append((trigger, arm, np.asarray(offset, float)))
-        self.triggers.boxes.centers[trigger] = arm.tool_position + offset
+        self.triggers.move(trigger, arm.tool_position + offset)
 
     def grip(self, arm: KinematicArm, body: int) -> None:
         """The body leaves the dynamics and follows the tool (the paper's gripping component)."""
         if body in self._base_bodies:
             raise NotImplementedError("gripping a bottle with a second base body")
+        if self.rest.resting[body]:
+            self._wake(np.array([body]))
+        self.rest.forget(body)
+        self._held[arm] = body
         arm.hold(self._bodies[body], self.positions[body], self.orientations[body].tolist())
 
     def release(self, arm: KinematicArm) -> None:
+        self._held.pop(arm, None)
         arm.let_go()
 
     def _move_arms(self) -> None:
         for arm in self.arms:
             arm.update(self.tick)
         for trigger, arm, offset in self._following:
-            self.triggers.boxes.centers[trigger] = arm.tool_position + offset
+            self.triggers.move(trigger, arm.tool_position + offset)
 
     # --- stepping -------------------------------------------------------------------------
     def start(self) -> None:
@@ -408,15 +442,23 @@ class PhysicsWorld:
         or leave. Returns the number of ticks advanced.
         """
         self.start()
-        step, client, triggers = pybullet.stepSimulation, self._client, self.triggers
+        step, client, triggers, rest = pybullet.stepSimulation, self._client, self.triggers, self.rest
         for done in range(1, substeps + 1):
+            if rest.resting.any():
+                self._wake_near()
             self._apply_fields()
             step(client)
             self.tick += 1
             if self.arms:
                 self._move_arms()
+            full = self._full_read
             self._read_state()
-            event = triggers.evaluate(self.tick, self.positions, self.radii, self.half_heights, self._live_rows)
+            moved = None if full else self._live_rows
+            event = triggers.evaluate(self.tick, self.positions, self.radii, self.half_heights, self._play_rows, moved)
+            if self.check_rest:
+                self._check_rest()
+            if rest.enabled:
+                self._settle()
             if event and stop_on_event:
                 return done
         return substeps
@@ -429,30 +471,110 @@ class PhysicsWorld:
         self.tick += substeps
 
     def _read_state(self) -> None:
-        # One pose and one velocity query per body in play: pybullet has no call for many bodies.
+        # One pose and one velocity query per body read: pybullet has no call for many bodies.
         # The arrays are built in one pass over the flattened tuples (half the cost of one
         # np.array per quantity), and positions, orientations and velocities are views of them.
-        bodies = self._bodies
-        if not bodies:
+        # Parked and resting bodies are not read (their pose stands); all are after a park or unpark.
+        if not self._bodies:
             return
-        rows = self._live_rows              # None: read every body (nothing parked, or it changed)
-        if rows is not None:
-            bodies = self._live_ids
-            if not bodies:
-                return
-        client, n = self._client, len(bodies)
-        pose, velocity, flat = pybullet.getBasePositionAndOrientation, pybullet.getBaseVelocity, chain.from_iterable
-        poses = np.fromiter(flat(flat([pose(b, client) for b in bodies])), float, 7 * n).reshape(n, 7)
-        twists = np.fromiter(flat(flat([velocity(b, client) for b in bodies])), float, 6 * n).reshape(n, 6)
-        if rows is None:
-            self.positions, self.orientations = poses[:, :3], poses[:, 3:]
-            self.velocities, self.angular_velocities = twists[:, :3], twists[:, 3:]
-            if self._parked:
-                self._live_rows = np.array(sorted(set(range(len(self._bodies))) - self._parked), dtype=int)
-                self._live_ids = [self._bodies[n] for n in self._live_rows.tolist()]
-        else:
-            self.positions[rows], self.orientations[rows] = poses[:, :3], poses[:, 3:]
-            self.velocities[rows], self.angular_velocities[rows] = twists[:, :3], twists[:, 3:]
+        if self._rows_stale:
+            self._refresh_rows()
+        rows = None if self._full_read else self._live_rows
+        self._full_read = False
+        bodies = self._bodies if rows is None else self._live_ids
+        if bodies:
+            client, n = self._client, len(bodies)
+            pose, velocity, flat = pybullet.getBasePositionAndOrientation, pybullet.getBaseVelocity, chain.from_iterable
+            poses = np.fromiter(flat(flat([pose(b, client) for b in bodies])), float, 7 * n).reshape(n, 7)
+            twists = np.fromiter(flat(flat([velocity(b, client) for b in bodies])), float, 6 * n).reshape(n, 6)
+            if rows is None:
+                self.positions, self.orientations = poses[:, :3], poses[:, 3:]
+                self.velocities, self.angular_velocities = twists[:, :3], twists[:, 3:]
+            else:
+                self.positions[rows], self.orientations[rows] = poses[:, :3], poses[:, 3:]
+                self.velocities[rows], self.angular_velocities[rows] = twists[:, :3], twists[:, 3:]
+        self._under = self._fields_under(self._live_rows)
+
+    def _refresh_rows(self) -> None:
+        """Work out the bodies in play and those read per tick after a park, unpark, rest or wake."""
+        play = np.ones(len(self._bodies), bool)
+        play[list(self._parked)] = False
+        live = play & ~self.rest.resting
+        self._play_rows = None if play.all() else np.flatnonzero(play)
+        self._live_rows = None if live.all() else np.flatnonzero(live)
+        self._live_ids = [] if self._live_rows is None else [self._bodies[n] for n in self._live_rows.tolist()]
+        self._rows_stale = False
+        self._under = None
+
+    def _moved(self) -> None:
+        """A body was put somewhere by the plant (parked, unparked): read every body next tick."""
+        self._full_read = True
+        self._rows_stale = True
+        self._under = None
+
+    def _fields_under(self, rows) -> np.ndarray:
+        return self.fields.which(self.positions if rows is None else self.positions[rows])
+
+    # --- bodies at rest (rest.py) ------------------------------------------------------------
+    def _awake_rows(self) -> np.ndarray:
+        if self._rows_stale:
+            self._refresh_rows()
+        return np.arange(len(self._bodies)) if self._live_rows is None else self._live_rows
+
+    def _settle(self) -> None:
+        """Put to rest the bodies that have been still long enough where nothing drives them."""
+        rows = self._awake_rows()
+        if len(rows) == 0:
+            return
+        field = self._under
+        undriven = field < 0
+        if len(self.fields):
+            undriven |= self.fields.speeds[field] == 0.0
+        if self._held:
+            undriven &= ~np.isin(rows, list(self._held.values()))
+        state = self.positions, self.orientations, self.velocities, self.angular_velocities
+        candidates = self.rest.candidates(rows, state[2], state[3], undriven)
+        if len(candidates):
+            candidates = self.rest.settle(candidates, rows, *state)
+        if len(candidates):
+            for b in (self._bodies[n] for n in candidates.tolist()):
+                self._call(pybullet.changeDynamics, b, -1, activationState=pybullet.ACTIVATION_STATE_ENABLE_SLEEPING)
+                self._call(pybullet.changeDynamics, b, -1, activationState=pybullet.ACTIVATION_STATE_SLEEP)
+            self.rest.put(candidates, self.positions, self.orientations, field[np.searchsorted(rows, candidates)])
+            # What the engine holds for a sleeping body from its next tick on.
+            self.velocities[candidates] = 0.0
+            self.angular_velocities[candidates] = 0.0
+            self._rows_stale = True
+
+    def _wake_near(self) -> None:
+        """Before a tick: wake the resting bodies an awake body has come near (the island Bullet wakes)."""
+        self._wake(self.rest.woken_by(self._awake_rows(), self.positions, self.orientations, self.velocities,
+                                      self.angular_velocities))
+
+    def _wake(self, rows: np.ndarray) -> None:
+        if len(rows) == 0:
+            return
+        for b in (self._bodies[n] for n in rows.tolist()):
+            self._call(pybullet.changeDynamics, b, -1, activationState=pybullet.ACTIVATION_STATE_WAKE_UP)
+            self._call(pybullet.changeDynamics, b, -1, activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING)
+        self.rest.wake(rows)
+        self._rows_stale = True
+
+    def _check_rest(self) -> None:
+        """Every resting body as the engine holds it: where planthub left it, not moving."""
+        client = self._client
+        for n in self.rest.rows().tolist():
+            position, orientation = pybullet.getBasePositionAndOrientation(self._bodies[n], client)
+            velocity, spin = pybullet.getBaseVelocity(self._bodies[n], client)
+            if (tuple(self.positions[n]) != position or tuple(self.orientations[n]) != orientation
+                    or velocity != (0.0, 0.0, 0.0) or spin != (0.0, 0.0, 0.0)):
+                raise RuntimeError(
+                    f"tick {self.tick}: {self.labels[n]} rests in planthub but the engine moved it: "
+                    f"at {position} moving {velocity}, held at {tuple(self.positions[n])}")
+
+    def engine_box(self, body: int) -> tuple[tuple, tuple]:
+        """The box (lo, hi) the engine bounds a body by, without its pair-search widening (tests)."""
+        return self._call(pybullet.getAABB, self._bodies[body])
 
     def tilt(self, body: int) -> float:
         """Angle in radians between the body's axis and the plumb line."""

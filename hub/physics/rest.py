@@ -1,0 +1,225 @@
+"""Bodies at rest: which bottles the engine may leave asleep, and which must wake before a tick.
+
+Bullet stops integrating a body that sleeps, and solves nothing for an island of sleeping
+bodies: 81 bottles standing in the bottling plant's stopped magazine cost the engine 1150–1240
+µs per tick awake and 480 asleep. Bullet's own rule (slower than 0.8 m/s for 2 s) would put a
+bottle riding a belt to sleep — the belt is a force planthub applies, which wakes nothing — so
+every body is created with sleeping disabled and the hub decides, from the state it reads at
+every tick anyway:
+
+- A body may rest when it has been still (speed under `speed`, spin under `spin`) for `after`
+  seconds where nothing drives it — on no belt, or on a belt standing still — and is not held
+  by an arm, and when its box overlaps no awake body's box (see below).
+- A resting body is not read, driven or tested at any tick; its last pose stays in the state
+  arrays and its velocity is zero, which is what the engine holds for a sleeping body.
+- It wakes when its belt's speed changes, when a switchable part overlapping it turns solid or
+  void, when an arm grips it, and when an awake body comes near.
+
+"Near" follows Bullet's own rule exactly enough to be safe: Bullet wakes a sleeping body at a
+tick when its island — bodies joined by overlapping bounding boxes, each widened by the contact
+breaking threshold — holds an awake one. The hub widens the same boxes a little more (for
+the shapes' collision margins) and wakes the whole group of resting bodies whose boxes join
+an awake body's, before the engine steps. A resting body the engine moved behind the hub's
+back would show as a difference between its pose in the engine and in the arrays:
+`PhysicsWorld.check_rest` compares them at every tick (tests/physics/test_rest.py, and the
+bottling plant's window in tests/test_bottling_plant.py).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+BREAKING = 0.02        # m: Bullet widens every box by its contact breaking threshold before the pair search
+SHAPE_MARGIN = 0.002   # m: above the exact box of a cylinder and a sphere for the shapes' margins (measured ≤ 1 mm)
+
+
+def boxes(orientations: np.ndarray, radii: np.ndarray, half_heights: np.ndarray,
+          velocities: np.ndarray | None = None, spins: np.ndarray | None = None, dt: float = 0.0) -> np.ndarray:
+    """Half extents (N,3) of each bottle's box about its centre of mass as the engine pairs it.
+
+    Bullet bounds a shape by its local box — (r, r, h) for a cylinder of radius r and half
+    height h, or for the bottle's cylinder with its widest ring — turned into the world: half
+    extent i is Σⱼ |Rᵢⱼ|·lⱼ, so a bottle turned 45° about its axis has a box 41 % wider than
+    itself. Then margins and the breaking threshold. A moving body's box also covers where it
+    is headed in the next tick (Bullet joins the box at the pose predicted from the velocity):
+    |vᵢ|·dt, and the turn of its farthest point, |ω|·√(2r² + h²)·dt, both ways."""
+    x, y, z, w = orientations[:, 0], orientations[:, 1], orientations[:, 2], orientations[:, 3]
+    r, h = radii, half_heights
+    # |R|·(r, r, h) row by row, R the rotation matrix of the unit quaternion (x, y, z, w).
+    xx, yy, zz = x * x, y * y, z * z
+    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
+    extents = np.stack((
+        (np.abs(1 - 2 * (yy + zz)) + np.abs(2 * (xy - wz))) * r + np.abs(2 * (xz + wy)) * h,
+        (np.abs(2 * (xy + wz)) + np.abs(1 - 2 * (xx + zz))) * r + np.abs(2 * (yz - wx)) * h,
+        (np.abs(2 * (xz - wy)) + np.abs(2 * (yz + wx))) * r + np.abs(1 - 2 * (xx + yy)) * h,
+    ), axis=1) + (SHAPE_MARGIN + BREAKING)
+    if velocities is not None:
+        reach = np.sqrt((spins * spins).sum(axis=1)) * np.sqrt(2 * r * r + h * h)
+        extents += (np.abs(velocities) + reach[:, None]) * dt
+    return extents
+
+
+def overlapping(centres_a, extents_a, centres_b, extents_b) -> np.ndarray:
+    """(A, B): whether each box of a overlaps each box of b."""
+    gap = np.abs(centres_a[:, None, :] - centres_b[None, :, :]) - extents_a[:, None, :] - extents_b[None, :, :]
+    return (gap < 0.0).all(axis=2)
+
+
+def bounds(radii: np.ndarray, half_heights: np.ndarray, velocities: np.ndarray, spins: np.ndarray,
+           dt: float) -> np.ndarray:
+    """A half extent (N,) that holds `boxes` on every axis in any orientation: Σⱼ |Rᵢⱼ|·lⱼ is
+    at most |l| (Cauchy–Schwarz on a row of a rotation), and |vᵢ| at most |v|. Three numpy
+    calls instead of thirty: the test that comes first at every tick."""
+    size = np.sqrt(2.0 * radii * radii + half_heights * half_heights)
+    speed = np.sqrt((velocities * velocities).sum(axis=1)) + np.sqrt((spins * spins).sum(axis=1)) * size
+    return size + (SHAPE_MARGIN + BREAKING) + speed * dt
+
+
+class Rest:
+    """Still-time counters and the resting set of a world's bodies, in body order (numpy only).
+
+    The methods take the world's state arrays (positions, orientations, velocities, spins) as
+    they are after the last read; a resting body's entries stand while it rests."""
+
+    def __init__(self, rate: int, after: float = 0.1, speed: float = 1e-3, spin: float = 0.01):
+        self.ticks = max(1, round(after * rate)) if after > 0 else 0   # 0: nothing ever rests
+        self.retry = max(1, self.ticks // 3)   # ticks between two tries of a still body left awake
+        self.dt = 1.0 / rate
+        self._speed2, self._spin2 = speed * speed, spin * spin
+        self.allowed = np.zeros(0, bool)       # the body's kind may rest (a plain rigid bottle)
+        self.radii = np.zeros(0)
+        self.half_heights = np.zeros(0)
+        self.still = np.zeros(0, int)          # ticks it has been still where nothing drives it
+        self.resting = np.zeros(0, bool)
+        self.extents = np.zeros((0, 3))        # box half extents of resting bodies, fixed while they rest
+        self.fields = np.zeros(0, int)         # the belt each resting body stands on (−1: none)
+        self._at_rest = None                   # (rows, centres, extents) of the resting set, until it changes
+
+    @property
+    def enabled(self) -> bool:
+        return self.ticks > 0
+
+    def add(self, allowed: bool, radius: float, half_height: float) -> None:
+        self.allowed = np.append(self.allowed, allowed and self.enabled)
+        self.radii = np.append(self.radii, radius)
+        self.half_heights = np.append(self.half_heights, half_height)
+        self.still = np.append(self.still, 0)
+        self.resting = np.append(self.resting, False)
+        self.extents = np.vstack((self.extents, np.zeros((1, 3))))
+        self.fields = np.append(self.fields, -1)
+
+    def rows(self) -> np.ndarray:
+        return self._resting_set(None)[0]
+
+    def _resting_set(self, positions):
+        if self._at_rest is None:
+            rows = np.flatnonzero(self.resting)
+            self._at_rest = (rows, None if positions is None else positions[rows], self.extents[rows])
+        elif self._at_rest[1] is None and positions is not None:
+            rows = self._at_rest[0]
+            self._at_rest = (rows, positions[rows], self._at_rest[2])
+        return self._at_rest
+
+    def boxes(self, rows, orientations, velocities=None, spins=None) -> np.ndarray:
+        if velocities is None:
+            return boxes(orientations[rows], self.radii[rows], self.half_heights[rows])
+        return boxes(orientations[rows], self.radii[rows], self.half_heights[rows], velocities[rows], spins[rows],
+                     self.dt)
+
+    def _bounds(self, rows, velocities, spins) -> np.ndarray:
+        return bounds(self.radii[rows], self.half_heights[rows], velocities[rows], spins[rows], self.dt)
+
+    def candidates(self, rows: np.ndarray, velocities: np.ndarray, spins: np.ndarray, undriven: np.ndarray) -> np.ndarray:
+        """Count one tick for the awake `rows` (`undriven`: nothing drives them); the rows that
+        have now been still long enough to rest."""
+        v, w = velocities[rows], spins[rows]
+        still = (undriven & self.allowed[rows]
+                 & ((v * v).sum(axis=1) < self._speed2) & ((w * w).sum(axis=1) < self._spin2))
+        counts = np.where(still, self.still[rows] + 1, 0)
+        self.still[rows] = counts
+        due = counts >= self.ticks
+        # All that are due go together (a queue whose bottles came to rest a tick apart rests as
+        # one group), when one has just become due or one left awake is due to try again.
+        over = counts[due] - self.ticks
+        if not (over % self.retry == 0).any():
+            return rows[:0]
+        return rows[due]
+
+    def settle(self, candidates: np.ndarray, awake: np.ndarray, positions, orientations, velocities,
+               spins) -> np.ndarray:
+        """Of the candidates, those whose boxes join no box of a body that stays awake: a body
+        that would be woken at once is left awake, to try again `retry` ticks later."""
+        others = np.setdiff1d(awake, candidates, assume_unique=True)
+        extents = self.boxes(candidates, orientations)
+        keep = np.ones(len(candidates), bool)
+        near = self._near(positions[candidates], extents, others, positions, velocities, spins)
+        blockers_p = positions[near]
+        blockers_e = self.boxes(near, orientations, velocities, spins)
+        while len(blockers_p):
+            hit = overlapping(positions[candidates], extents, blockers_p, blockers_e).any(axis=1) & keep
+            if not hit.any():
+                break
+            keep &= ~hit          # a candidate left awake blocks those that join it in turn
+            blockers_p, blockers_e = positions[candidates[hit]], extents[hit]
+        return candidates[keep]
+
+    def _near(self, centres, extents, awake, positions, velocities, spins) -> np.ndarray:
+        """The awake rows whose bound comes within the boxes (centres, extents)."""
+        if len(awake) == 0 or len(centres) == 0:
+            return awake[:0]
+        reach = self._bounds(awake, velocities, spins)
+        gap = np.abs(positions[awake][:, None, :] - centres[None, :, :]) - extents[None, :, :]
+        return awake[(gap < reach[:, None, None]).all(axis=2).any(axis=1)]
+
+    def put(self, rows: np.ndarray, positions, orientations, fields: np.ndarray) -> None:
+        self.resting[rows] = True
+        self.extents[rows] = self.boxes(rows, orientations)
+        self.fields[rows] = fields
+        self._at_rest = None
+
+    def woken_by(self, awake: np.ndarray, positions, orientations, velocities, spins) -> np.ndarray:
+        """The resting rows whose boxes join an awake body's, directly or through other resting
+        boxes (the island Bullet would wake). The awake bodies' bounds first, their boxes only
+        where a bound reaches a resting box."""
+        resting, centres, extents = self._resting_set(positions)
+        if len(resting) == 0 or len(awake) == 0:
+            return resting[:0]
+        near = self._near(centres, extents, awake, positions, velocities, spins)
+        if len(near) == 0:
+            return resting[:0]
+        return self.joining(positions[near], self.boxes(near, orientations, velocities, spins), positions)
+
+    def joining(self, centres, extents, positions) -> np.ndarray:
+        """The resting rows (and their groups) whose boxes overlap any of the boxes (centres, extents)."""
+        resting, rest_centres, rest_extents = self._resting_set(positions)
+        if len(resting) == 0:
+            return resting
+        seeds = overlapping(rest_centres, rest_extents, np.asarray(centres, float), np.asarray(extents, float)).any(axis=1)
+        return self._group(seeds, positions) if seeds.any() else resting[:0]
+
+    def on_field(self, field: int, positions) -> np.ndarray:
+        """The resting rows standing on `field`, with their groups."""
+        resting = self._resting_set(positions)[0]
+        seeds = self.fields[resting] == field
+        return self._group(seeds, positions) if seeds.any() else resting[:0]
+
+    def _group(self, seeds: np.ndarray, positions) -> np.ndarray:
+        resting, centres, extents = self._resting_set(positions)
+        joined = overlapping(centres, extents, centres, extents)
+        woken = seeds.copy()
+        frontier = seeds
+        while frontier.any():
+            frontier = joined[frontier].any(axis=0) & ~woken
+            woken |= frontier
+        return resting[woken]
+
+    def wake(self, rows: np.ndarray) -> None:
+        self.resting[rows] = False
+        self.still[rows] = 0
+        self._at_rest = None
+
+    def forget(self, row: int) -> None:
+        """The body left play or was moved by the plant: not resting, its still time from zero."""
+        if self.resting[row]:
+            self._at_rest = None
+        self.resting[row] = False
+        self.still[row] = 0
