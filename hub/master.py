@@ -9,6 +9,7 @@ from .commands import Commands
 from .component import Component
 from .dataplane import DataPlane
 from .lockstep import Lockstep, RemoteSlave
+from .orders import Orders
 from .plant import Plant
 from .recorder import Recorder
 from .scenario import BusSettings
@@ -21,7 +22,7 @@ class RunResult:
     ticks: int
     rate: int
     wall_seconds: float
-    stopped_by: str = ""    # why the run ended before the scenario's end (an operator's stop)
+    stopped_by: str = ""    # why the run ended before the scenario's end (an operator's stop, its orders)
 
     @property
     def sim_seconds(self) -> float:
@@ -68,7 +69,8 @@ class Master:
         self._remote = [c.slave for c in plant.components if isinstance(getattr(c, "slave", None), RemoteSlave)]
         self._own_bus = False
         self._started = self._closed = False
-        self.stopped_by = ""
+        self.stopped_by = ""    # set, the run is over (an operator's stop, or its orders delivered)
+        self.orders = Orders.for_plant(plant)
         comps = plant.components
         # Only components that do something in a hook are called: a scene of 100 bottles should
         # not pay 200 empty calls per communication step.
@@ -177,13 +179,17 @@ class Master:
             pacer = self.pacer
             if pacer is not None:
                 pacer.start(self.world.tick)
-            while self.world.tick < end and not self._stop_requested():
+            orders = self.orders
+            while self.world.tick < end and not self.stopped_by and not self._stop_requested():
                 self.advance(end)
                 self.communicate()
                 if pacer is not None:
                     pacer.wait(self.world.tick)
                 if progress is not None:
                     progress(self.world.tick, end)
+                if orders is not None and orders.done():
+                    self.stopped_by = orders.reason(self.world.tick / self.world.rate)
+                    break
         except BaseException:
             self.close("the run failed")
             raise

@@ -65,7 +65,8 @@ class RunSettings:
     event_driven: bool = False   # a trigger event ends the communication step at its tick
     master: str = "jacobi"       # or "gauss-seidel": how logic components step (hub/gauss_seidel.py)
     jam_after: float = 5.0       # s a bottle stands still on a running belt, not held at a gate, to be jammed (hub/jams.py)
-    sleep_after: float = 0.1     # s a bottle stands still where nothing drives it before it rests (hub/physics/rest.py); 0: never
+    sleep_after: float = 0.05    # s a bottle stands still where nothing drives it before it rests (hub/physics/rest.py); 0: never
+    orders: int | None = None    # the run ends once the sinks took this many bottles (hub/orders.py); None: at its duration
     bus: BusSettings | None = None   # None: no `run.bus` section
 
     @property
@@ -220,6 +221,7 @@ class _Checker:
         data = self.data
         run = self.run = self.run_settings(_dict(data.get("run")))
         objects, slot_tables = self.objects(_dict(data.get("objects")), self.defaults(_dict(data.get("defaults"))))
+        self.orders(run, objects)
         # The logic's own wiring comes first, so a scenario's flows into the same slot win.
         flows = self.wiring(objects, slot_tables) + self.flows(_list(data.get("flows")), slot_tables)
         record = self.record(_list(data.get("record")), slot_tables)
@@ -256,8 +258,23 @@ class _Checker:
             master=run.get("master") if run.get("master") in ("jacobi", "gauss-seidel") else "jacobi",
             jam_after=float(setting("jam_after", 5.0)),
             sleep_after=float(run["sleep_after"]) if type(run.get("sleep_after")) in (int, float)
-            and run["sleep_after"] >= 0 else 0.1,
+            and run["sleep_after"] >= 0 else 0.05,
+            orders=setting("orders", None, int),
             bus=self.bus_settings(run["bus"]) if isinstance(run.get("bus"), dict) else None)
+
+    def orders(self, run: RunSettings, objects) -> None:
+        """`run.orders` needs sinks to deliver to, and no more orders than the sources put out."""
+        if run.orders is None:
+            return
+        from modules.source import Source   # the module's own rule for what a source holds
+        if not any(obj.module_name == "sink" for obj in objects):
+            self.problem(("run", "orders"), f"{run.orders} orders, but no sink takes bottles out: "
+                                            "add a `sink` object or leave out run.orders")
+            return
+        supply = sum(len(Source.bottles(obj.name, obj.params, run.seed)) for obj in objects
+                     if obj.module_name == "source")
+        if run.orders > supply:
+            self.problem(("run", "orders"), f"{run.orders} orders, but the sources put out only {supply} bottles")
 
     def bus_settings(self, section: dict) -> BusSettings:
         bus = _bus_settings(section, self.path.parent)

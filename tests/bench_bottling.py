@@ -1,14 +1,13 @@
-"""`make bench`, the bottling plant: cost per tick with 100 bottles on the line at 150 Hz, beside
-bare pybullet stepping of the same scene, with the routing logic in the hub and over Zenoh, with
-bottles at rest left asleep (the default, hub/physics/rest.py) and without; and what leaving
-them asleep changes in the plant's deliveries.
+"""`make bench`, the bottling plant: cost per tick with 100 bottles on the line at 150 Hz, with
+the routing logic in the hub and over Zenoh, with bottles at rest left asleep (the default,
+hub/physics/rest.py) and without; and what leaving them asleep changes in the deliveries.
 
 From 100 s to 110 s of scenarios/bottling_plant.yaml about 100 bottles are on the line (95–101
 from 80 s to 125 s; most of them stand in the magazine's queue, which stops while a bottle waits
 at the separator): the hub steps that window with everything (fields, triggers, 8 logic FMUs,
-the plant-management logic, the flows), then bare pybullet steps the same bodies as many ticks
-from where the hub left them, asleep where the hub left them asleep. Medians of 3, measured
-alternately.
+the plant-management logic, the flows), timing pybullet's stepSimulation inside it; then bare
+pybullet steps the same bodies, all awake, as many ticks from where the hub left them. Medians
+of 3, measured alternately.
 """
 from __future__ import annotations
 
@@ -18,6 +17,7 @@ import time
 import numpy as np
 
 from hub.master import Master
+from hub.physics.world import pybullet
 from hub.plant import Plant
 from hub.recorder import Recorder
 from hub.scenario import load_scenario
@@ -35,9 +35,35 @@ def on_line(world) -> int:
     return int((world.positions[:, 2] > -50.0).sum())   # parked and delivered bodies wait 100 m down
 
 
-def window(in_process: bool, sleep_after: float) -> tuple[float, float, str, float]:
-    """(hub s, bare pybullet s, bottles on the line at the window's start–end, mean resting)."""
-    scenario = load_scenario(PLANT, {"objects.control.in_process": in_process, "run.sleep_after": sleep_after})
+class EngineClock:
+    """Time spent in pybullet.stepSimulation while installed: the engine's own part of a run."""
+
+    def __init__(self):
+        self.seconds = 0.0
+        self._step = None
+
+    def __enter__(self):
+        self._step = step = pybullet.stepSimulation
+
+        def timed(*args, **kwargs):
+            began = time.perf_counter()
+            step(*args, **kwargs)
+            self.seconds += time.perf_counter() - began
+        pybullet.stepSimulation = timed
+        return self
+
+    def __exit__(self, *exc):
+        pybullet.stepSimulation = self._step
+
+
+def window(in_process: bool, sleep_after: float | None) -> tuple[float, float, float, str, float]:
+    """(hub s, of it the engine s, bare pybullet s, bottles on the line at the window's
+    start–end, mean asleep). Bare: pybullet alone steps the same bodies as many ticks from
+    where the hub left them, every one awake (as in a world without rest)."""
+    overrides = {"objects.control.in_process": in_process}
+    if sleep_after is not None:
+        overrides["run.sleep_after"] = sleep_after
+    scenario = load_scenario(PLANT, overrides)
     rate = scenario.run.physics_rate
     start, end = (round(t * rate) for t in WINDOW)
     with Plant(scenario) as plant:
@@ -47,22 +73,26 @@ def window(in_process: bool, sleep_after: float) -> tuple[float, float, str, flo
             world = plant.world
             first = on_line(world)
             resting = []
-            began = time.perf_counter()
-            for tick in range(start, end, 150):     # a look each second: 10 of 1500 ticks
-                master.run(until_tick=tick + 150)
-                resting.append(int(world.rest.resting.sum()))
-            hub = time.perf_counter() - began
+            with EngineClock() as engine:
+                began = time.perf_counter()
+                for tick in range(start, end, 30):      # a look every 0.2 s
+                    master.run(until_tick=tick + 30)
+                    resting.append(int(world.rest.resting.sum()))
+                hub = time.perf_counter() - began
             count = f"{first}–{on_line(world)}"
+        world.wake_all()
         began = time.perf_counter()
         world.step_engine_only(end - start)
         bare = time.perf_counter() - began
-    return hub, bare, count, statistics.mean(resting)
+    return hub, engine.seconds, bare, count, statistics.mean(resting)
 
 
-def deliveries(sleep_after: float) -> tuple[dict[str, tuple[str, float]], float]:
+def deliveries(sleep_after: float | None) -> tuple[dict[str, tuple[str, float]], float]:
     """{bottle: (sink, time)} over the first COMPARED seconds, and the wall time."""
-    scenario = load_scenario(PLANT, {"objects.control.in_process": True, "run.sleep_after": sleep_after,
-                                     "run.duration": COMPARED})
+    overrides = {"objects.control.in_process": True, "run.duration": COMPARED}
+    if sleep_after is not None:
+        overrides["run.sleep_after"] = sleep_after
+    scenario = load_scenario(PLANT, overrides)
     rate = scenario.run.physics_rate
     with Plant(scenario) as plant:
         with Master(plant, Recorder([], rate)) as master:
@@ -77,10 +107,10 @@ def deliveries(sleep_after: float) -> tuple[dict[str, tuple[str, float]], float]
 def bottling_plant() -> None:
     print(f"\n## The bottling plant at 150 Hz with 100 bottles on the line ({WINDOW[0]:g}–{WINDOW[1]:g} s)\n")
     print("| bottles at rest | routing logic | bottles on the line | of them asleep (mean) | hub µs/tick "
-          "| bare pybullet µs/tick | hub / bare | hub real-time factor | bare real-time factor |")
+          "| of it the engine | bare pybullet, all awake | hub real-time factor | bare real-time factor |")
     print("|---|---|---:|---:|---:|---:|---:|---:|---:|")
     ticks = round((WINDOW[1] - WINDOW[0]) * 150)
-    cases = ((0.1, True, "asleep (default)", "in the hub"), (0.1, False, "asleep (default)", "over Zenoh"),
+    cases = ((None, True, "asleep (default)", "in the hub"), (None, False, "asleep (default)", "over Zenoh"),
              (0.0, True, "awake (`sleep_after: 0`)", "in the hub"))
     samples = {case: [] for case in cases}
     for _ in range(REPEATS):
@@ -88,14 +118,13 @@ def bottling_plant() -> None:
             samples[case].append(window(case[1], case[0]))
     sim = WINDOW[1] - WINDOW[0]
     for case in cases:
-        hub = statistics.median(s[0] for s in samples[case])
-        bare = statistics.median(s[1] for s in samples[case])
-        count, resting = samples[case][0][2], statistics.median(s[3] for s in samples[case])
-        print(f"| {case[2]} | {case[3]} | {count} | {resting:.0f} | {1e6 * hub / ticks:.0f} | {1e6 * bare / ticks:.0f} "
-              f"| {hub / bare:.2f} | {sim / hub:.1f}× | {sim / bare:.1f}× |")
+        hub, engine, bare = (statistics.median(s[k] for s in samples[case]) for k in range(3))
+        count, resting = samples[case][0][3], statistics.median(s[4] for s in samples[case])
+        print(f"| {case[2]} | {case[3]} | {count} | {resting:.0f} | {1e6 * hub / ticks:.0f} "
+              f"| {1e6 * engine / ticks:.0f} | {1e6 * bare / ticks:.0f} | {sim / hub:.1f}× | {sim / bare:.1f}× |")
 
     print(f"\n### What rest changes: the first {COMPARED:g} s, routing in the hub\n")
-    asleep, wall_asleep = deliveries(0.1)
+    asleep, wall_asleep = deliveries(None)
     awake, wall_awake = deliveries(0.0)
     both = sorted(set(asleep) & set(awake))
     shift = np.array([asleep[b][1] - awake[b][1] for b in both])

@@ -187,6 +187,19 @@ def test_communication_step_must_be_whole_ticks(write_scenario):
                      f"150 Hz (nearest: 0.00666667 s = 1 ticks, 0.0133333 s = 2 ticks)"]
 
 
+def test_sleep_after_must_be_a_time_not_below_zero(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        run: {sleep_after: -0.1}
+        objects:
+          bottle: {module: bottle, position: [0, 0, 0]}
+        """)
+    found, _ = problems(path)
+    assert found == [f"{path}:2: run.sleep_after: -0.1 is less than the minimum of 0"]
+    found, _ = problems(path, {"run.sleep_after": "soon"})
+    assert found == [f"{path}:2: run.sleep_after: 'soon' is not of type 'number'"]
+
+
 def test_ambiguous_short_slot_name(write_scenario):
     path = write_scenario("""
         planthub: 1

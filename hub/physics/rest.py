@@ -32,6 +32,25 @@ BREAKING = 0.02        # m: Bullet widens every box by its contact breaking thre
 SHAPE_MARGIN = 0.002   # m: above the exact box of a cylinder and a sphere for the shapes' margins (measured ≤ 1 mm)
 
 
+def _quadratic_forms() -> np.ndarray:
+    """(16, 9): the rotation matrix of a unit quaternion q = (x, y, z, w), row by row, as
+    linear forms of the products qₐ·q_b: R = (q ⊗ q).reshape(16) @ this."""
+    x, y, z, w = range(4)
+    forms = np.zeros((4, 4, 9))
+    terms = {0: [(w, w, 1), (x, x, 1), (y, y, -1), (z, z, -1)], 1: [(x, y, 2), (w, z, -2)],
+             2: [(x, z, 2), (w, y, 2)], 3: [(x, y, 2), (w, z, 2)],
+             4: [(w, w, 1), (x, x, -1), (y, y, 1), (z, z, -1)], 5: [(y, z, 2), (w, x, -2)],
+             6: [(x, z, 2), (w, y, -2)], 7: [(y, z, 2), (w, x, 2)],
+             8: [(w, w, 1), (x, x, -1), (y, y, -1), (z, z, 1)]}
+    for entry, products in terms.items():
+        for a, b, k in products:
+            forms[a, b, entry] += k
+    return forms.reshape(16, 9)
+
+
+_ROTATION = _quadratic_forms()
+
+
 def boxes(orientations: np.ndarray, radii: np.ndarray, half_heights: np.ndarray,
           velocities: np.ndarray | None = None, spins: np.ndarray | None = None, dt: float = 0.0) -> np.ndarray:
     """Half extents (N,3) of each bottle's box about its centre of mass as the engine pairs it.
@@ -42,18 +61,12 @@ def boxes(orientations: np.ndarray, radii: np.ndarray, half_heights: np.ndarray,
     itself. Then margins and the breaking threshold. A moving body's box also covers where it
     is headed in the next tick (Bullet joins the box at the pose predicted from the velocity):
     |vᵢ|·dt, and the turn of its farthest point, |ω|·√(2r² + h²)·dt, both ways."""
-    x, y, z, w = orientations[:, 0], orientations[:, 1], orientations[:, 2], orientations[:, 3]
-    r, h = radii, half_heights
-    # |R|·(r, r, h) row by row, R the rotation matrix of the unit quaternion (x, y, z, w).
-    xx, yy, zz = x * x, y * y, z * z
-    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
-    extents = np.stack((
-        (np.abs(1 - 2 * (yy + zz)) + np.abs(2 * (xy - wz))) * r + np.abs(2 * (xz + wy)) * h,
-        (np.abs(2 * (xy + wz)) + np.abs(1 - 2 * (xx + zz))) * r + np.abs(2 * (yz - wx)) * h,
-        (np.abs(2 * (xz - wy)) + np.abs(2 * (yz + wx))) * r + np.abs(1 - 2 * (xx + yy)) * h,
-    ), axis=1) + (SHAPE_MARGIN + BREAKING)
+    q = np.asarray(orientations, float)
+    rotation = np.abs((q[:, :, None] * q[:, None, :]).reshape(-1, 16) @ _ROTATION).reshape(-1, 3, 3)
+    local = np.stack((radii, radii, half_heights), axis=1)
+    extents = np.einsum("nij,nj->ni", rotation, local) + (SHAPE_MARGIN + BREAKING)
     if velocities is not None:
-        reach = np.sqrt((spins * spins).sum(axis=1)) * np.sqrt(2 * r * r + h * h)
+        reach = np.sqrt((spins * spins).sum(axis=1) * (2.0 * radii * radii + half_heights * half_heights))
         extents += (np.abs(velocities) + reach[:, None]) * dt
     return extents
 
@@ -80,9 +93,9 @@ class Rest:
     The methods take the world's state arrays (positions, orientations, velocities, spins) as
     they are after the last read; a resting body's entries stand while it rests."""
 
-    def __init__(self, rate: int, after: float = 0.1, speed: float = 1e-3, spin: float = 0.01):
+    def __init__(self, rate: int, after: float = 0.05, speed: float = 0.005, spin: float = 0.05):
         self.ticks = max(1, round(after * rate)) if after > 0 else 0   # 0: nothing ever rests
-        self.retry = max(1, self.ticks // 3)   # ticks between two tries of a still body left awake
+        self.retry = max(1, round(0.1 * rate))   # ticks between two tries of a still body left awake (0.1 s)
         self.dt = 1.0 / rate
         self._speed2, self._spin2 = speed * speed, spin * spin
         self.allowed = np.zeros(0, bool)       # the body's kind may rest (a plain rigid bottle)

@@ -24,9 +24,10 @@ PARKED = (-100.0, 0.0, -100.0)   # off stage: parked bodies wait here, 0.5 m apa
 class PhysicsWorld:
     """A headless pybullet world stepped in integer ticks of 1/rate seconds.
 
-    Every pybullet call of planthub lives in this class. Each substep reads the state of all
-    dynamic bodies once; force fields and triggers work on those arrays with numpy, which is
-    far cheaper than one pybullet query per body and volume. Bodies are created before the
+    Every pybullet call of planthub lives in this class. Each substep reads the state of every
+    body in play once, except those at rest (rest.py: asleep in the engine, their state
+    stands); force fields and triggers work on those arrays with numpy, which is far cheaper
+    than one pybullet query per body and volume. Bodies are created before the
     first step and never reset inside the loop, because pybullet is deterministic only for an
     identical sequence of calls.
     """
@@ -56,7 +57,7 @@ class PhysicsWorld:
     SOLVER_ITERATIONS = 20
 
     def __init__(self, rate: int, gravity: float = -9.81, solver_iterations: int | None = None,
-                 sleep_after: float = 0.1):
+                 sleep_after: float = 0.05):
         solver_iterations = solver_iterations or self.SOLVER_ITERATIONS
         self.rate = rate
         self.dt = 1.0 / rate
@@ -421,10 +422,10 @@ class PhysicsWorld:
         arm.let_go()
 
     def _move_arms(self) -> None:
-        for arm in self.arms:
-            arm.update(self.tick)
+        moved = [arm for arm in self.arms if arm.update(self.tick)]
         for trigger, arm, offset in self._following:
-            self.triggers.move(trigger, arm.tool_position + offset)
+            if arm in moved:
+                self.triggers.move(trigger, arm.tool_position + offset)
 
     # --- stepping -------------------------------------------------------------------------
     def start(self) -> None:
@@ -550,6 +551,10 @@ class PhysicsWorld:
         """Before a tick: wake the resting bodies an awake body has come near (the island Bullet wakes)."""
         self._wake(self.rest.woken_by(self._awake_rows(), self.positions, self.orientations, self.velocities,
                                       self.angular_velocities))
+
+    def wake_all(self) -> None:
+        """Wake every resting body (they rest again once still for sleep_after)."""
+        self._wake(self.rest.rows())
 
     def _wake(self, rows: np.ndarray) -> None:
         if len(rows) == 0:

@@ -1,0 +1,60 @@
+"""`run.orders`: the plant runs until its sinks have taken a set number of bottles (the
+duration stays the limit), from the command line and the Python API; bad settings are named."""
+import pytest
+
+from hub import Simulation
+from hub.errors import ScenarioError
+from hub.scenario import load_scenario
+
+from .helpers import ROOT, planthub_run
+from .test_plant_summary import taken
+
+SOURCE_SINK = ROOT / "scenarios" / "source_sink.yaml"   # 6 bottles, all delivered by 6.5 s
+
+
+def test_the_run_ends_at_the_point_its_last_order_is_delivered(tmp_path):
+    stdout, summary = planthub_run(SOURCE_SINK, tmp_path, "run.orders=4")
+    times = [t for t, _, _ in taken(tmp_path)]
+    assert len(times) == summary["plant"]["delivered"] == 4
+    # The event log reports a bottle taken at the point after the tick it entered the sink,
+    # the point at which the run ends.
+    assert summary["simulated"]["seconds"] == pytest.approx(times[-1]) and times[-1] < 6.5
+    assert f"  stopped      4 orders delivered at t = {times[-1]:.9g} s (run.orders)" in stdout.splitlines()
+
+
+def test_the_duration_stays_the_limit_and_the_api_stops_at_the_orders_too(tmp_path):
+    with Simulation(SOURCE_SINK, {"run.orders": 6, "run.duration": 3.0}) as sim:
+        result = sim.run()
+        assert result.stopped_by == "" and sim.time == 3.0 and sim.summary().plant.delivered < 6
+    with Simulation(SOURCE_SINK, {"run.orders": 2}) as sim:
+        result = sim.run()
+        assert sim.summary().plant.delivered == 2 and result.stopped_by.startswith("2 orders delivered at t = ")
+        stopped = sim.time
+        sim.run()                     # the run is over: nothing more happens
+        assert sim.time == stopped and sim.summary().plant.delivered == 2
+
+
+def test_orders_need_sinks_and_enough_bottles(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        run: {orders: 3}
+        objects:
+          belt: {module: conveyor, position: [0, 0, 0], length: 1.0}
+          source: {module: source, position: [0.05, 0, 0], count: 2}
+        """)
+    with pytest.raises(ScenarioError) as caught:
+        load_scenario(path)
+    assert str(caught.value).splitlines()[1:] == [
+        f"  - {path}:2: run.orders: 3 orders, but no sink takes bottles out: add a `sink` object or leave out run.orders"]
+    with pytest.raises(ScenarioError) as caught:
+        load_scenario(SOURCE_SINK, {"run.orders": 7})
+    assert str(caught.value).splitlines()[1:] == [
+        f"  - {SOURCE_SINK}:{line_of_run(SOURCE_SINK)}: run.orders: 7 orders, but the sources put out only 6 bottles"]
+    with pytest.raises(ScenarioError) as caught:
+        load_scenario(SOURCE_SINK, {"run.orders": 0})
+    assert str(caught.value).splitlines()[1:] == [
+        f"  - {SOURCE_SINK}:{line_of_run(SOURCE_SINK)}: run.orders: 0 is less than the minimum of 1"]
+
+
+def line_of_run(path) -> int:
+    return next(n for n, line in enumerate(path.read_text().splitlines(), 1) if line.startswith("run:"))
