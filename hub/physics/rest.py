@@ -96,6 +96,7 @@ class Rest:
     def __init__(self, rate: int, after: float = 0.05, speed: float = 0.005, spin: float = 0.05):
         self.ticks = max(1, round(after * rate)) if after > 0 else 0   # 0: nothing ever rests
         self.retry = max(1, round(0.1 * rate))   # ticks between two tries of a still body left awake (0.1 s)
+        self.every = max(1, min(3, self.ticks))    # ticks between two looks for still bodies
         self.dt = 1.0 / rate
         self._speed2, self._spin2 = speed * speed, spin * spin
         self.allowed = np.zeros(0, bool)       # the body's kind may rest (a plain rigid bottle)
@@ -106,6 +107,7 @@ class Rest:
         self.extents = np.zeros((0, 3))        # box half extents of resting bodies, fixed while they rest
         self.fields = np.zeros(0, int)         # the belt each resting body stands on (−1: none)
         self._at_rest = None                   # (rows, centres, extents) of the resting set, until it changes
+        self._span = (np.zeros(3), np.zeros(3))  # the box around all of them (lo, hi)
 
     @property
     def enabled(self) -> bool:
@@ -126,10 +128,13 @@ class Rest:
     def _resting_set(self, positions):
         if self._at_rest is None:
             rows = np.flatnonzero(self.resting)
-            self._at_rest = (rows, None if positions is None else positions[rows], self.extents[rows])
-        elif self._at_rest[1] is None and positions is not None:
-            rows = self._at_rest[0]
-            self._at_rest = (rows, positions[rows], self._at_rest[2])
+            self._at_rest = (rows, None, self.extents[rows])
+        if self._at_rest[1] is None and positions is not None:
+            rows, _, extents = self._at_rest
+            centres = positions[rows]
+            self._at_rest = (rows, centres, extents)
+            if len(rows):
+                self._span = (centres - extents).min(axis=0), (centres + extents).max(axis=0)
         return self._at_rest
 
     def boxes(self, rows, orientations, velocities=None, spins=None) -> np.ndarray:
@@ -142,18 +147,19 @@ class Rest:
         return bounds(self.radii[rows], self.half_heights[rows], velocities[rows], spins[rows], self.dt)
 
     def candidates(self, rows: np.ndarray, velocities: np.ndarray, spins: np.ndarray, undriven: np.ndarray) -> np.ndarray:
-        """Count one tick for the awake `rows` (`undriven`: nothing drives them); the rows that
-        have now been still long enough to rest."""
+        """A look at the awake `rows` (`undriven`: nothing drives them), one every `every`
+        ticks: a body still at this look counts `every` more still ticks, one that moves starts
+        from zero. The rows that have now been still long enough to rest."""
         v, w = velocities[rows], spins[rows]
         still = (undriven & self.allowed[rows]
                  & ((v * v).sum(axis=1) < self._speed2) & ((w * w).sum(axis=1) < self._spin2))
-        counts = np.where(still, self.still[rows] + 1, 0)
+        counts = np.where(still, self.still[rows] + self.every, 0)
         self.still[rows] = counts
         due = counts >= self.ticks
         # All that are due go together (a queue whose bottles came to rest a tick apart rests as
         # one group), when one has just become due or one left awake is due to try again.
         over = counts[due] - self.ticks
-        if not (over % self.retry == 0).any():
+        if not (over % self.retry < self.every).any():
             return rows[:0]
         return rows[due]
 
@@ -196,6 +202,10 @@ class Rest:
         resting, centres, extents = self._resting_set(positions)
         if len(resting) == 0 or len(awake) == 0:
             return resting[:0]
+        # First the box around all that rests: most awake bodies are far from all of it.
+        lo, hi = self._span
+        p, reach = positions[awake], self._bounds(awake, velocities, spins)[:, None]
+        awake = awake[((p + reach > lo) & (p - reach < hi)).all(axis=1)]
         near = self._near(centres, extents, awake, positions, velocities, spins)
         if len(near) == 0:
             return resting[:0]

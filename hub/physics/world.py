@@ -458,7 +458,7 @@ class PhysicsWorld:
             event = triggers.evaluate(self.tick, self.positions, self.radii, self.half_heights, self._play_rows, moved)
             if self.check_rest:
                 self._check_rest()
-            if rest.enabled:
+            if rest.enabled and self.tick % rest.every == 0:
                 self._settle()
             if event and stop_on_event:
                 return done
@@ -486,14 +486,14 @@ class PhysicsWorld:
         if bodies:
             client, n = self._client, len(bodies)
             pose, velocity, flat = pybullet.getBasePositionAndOrientation, pybullet.getBaseVelocity, chain.from_iterable
-            poses = np.fromiter(flat(flat([pose(b, client) for b in bodies])), float, 7 * n).reshape(n, 7)
-            twists = np.fromiter(flat(flat([velocity(b, client) for b in bodies])), float, 6 * n).reshape(n, 6)
+            # Per body 13 numbers: position, orientation, velocity, spin — one row of `state`.
+            read = np.fromiter(flat(flat([pose(b, client) + velocity(b, client) for b in bodies])), float, 13 * n)
             if rows is None:
-                self.positions, self.orientations = poses[:, :3], poses[:, 3:]
-                self.velocities, self.angular_velocities = twists[:, :3], twists[:, 3:]
+                self._state = state = read.reshape(n, 13)
+                self.positions, self.orientations = state[:, :3], state[:, 3:7]
+                self.velocities, self.angular_velocities = state[:, 7:10], state[:, 10:]
             else:
-                self.positions[rows], self.orientations[rows] = poses[:, :3], poses[:, 3:]
-                self.velocities[rows], self.angular_velocities[rows] = twists[:, :3], twists[:, 3:]
+                self._state[rows] = read.reshape(n, 13)
         self._under = self._fields_under(self._live_rows)
 
     def _refresh_rows(self) -> None:
