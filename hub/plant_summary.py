@@ -1,6 +1,8 @@
 """The plant engineer's view of a run: bottles in, delivered by sink and destination, misrouted, on the line, throughput, jams."""
 from __future__ import annotations
 
+import math
+import time
 from dataclasses import dataclass
 
 from modules.belt import BeltDrive
@@ -12,6 +14,7 @@ from .jams import Jam, JamWatch
 from .physics.world import PARKED
 
 NO_DESTINATION = ""   # the destination of a bottle that has none (a `bottle` object): "" in JSON too
+BUSY = 0.9           # the line is full while it holds at least this share of the most bottles seen on it
 
 
 @dataclass(frozen=True)
@@ -42,6 +45,25 @@ class OnLine:
 
 
 @dataclass(frozen=True)
+class Busy:
+    """The part of a run while at least `at_least` bottles were on the line (90 % of the most):
+    simulated and wall seconds between the looks that saw them, and so the real-time factor
+    of a full line."""
+
+    at_least: int
+    sim_seconds: float
+    wall_seconds: float
+
+    @property
+    def realtime_factor(self) -> float | None:
+        return self.sim_seconds / self.wall_seconds if self.wall_seconds > 0 else None
+
+    def as_dict(self) -> dict:
+        return {"at_least": self.at_least, "simulated_seconds": self.sim_seconds,
+                "wall_seconds": self.wall_seconds, "realtime_factor": self.realtime_factor}
+
+
+@dataclass(frozen=True)
 class PlantSummary:
     """What came in, what went out where, what is left and what got stuck, over [start, end] s."""
 
@@ -55,6 +77,9 @@ class PlantSummary:
     on_line: tuple[OnLine, ...]
     jams: tuple[Jam, ...]
     jam_after: float
+    most_on_line: int = 0                # the most bottles on the line at one look (every 0.1 s)
+    most_on_line_at: float = 0.0         # s, the first look that saw them
+    busy: Busy | None = None             # the run while the line was near its fullest (wall time: not in as_dict)
 
     @property
     def bottles_in(self) -> int:
@@ -103,6 +128,7 @@ class PlantSummary:
                 {"bottle": m.bottle, "destination": m.destination, "sink": m.sink, "time": m.time}
                 for m in self.misrouted],
             "on_line": [{"bottle": b.bottle, "belt": b.belt, "position": list(b.position)} for b in self.on_line],
+            "most_on_line": {"bottles": self.most_on_line, "time": self.most_on_line_at},
             "throughput": {"per_minute": self.per_minute, "window": [self.start, self.end],
                            "first_to_last_per_minute": self.steady_per_minute,
                            "first": self.delivery_times[0] if self.delivery_times else None,
@@ -135,6 +161,7 @@ class PlantTally:
         holders = Holders([c.blocker for c in comps if isinstance(c, TwoPositions) and c.HOLDS])
         self.jam_after = plant.scenario.run.jam_after
         self.watch = JamWatch(world, self.belts, holders, self.jam_after)
+        self.looks: list[tuple[int, int, float]] = []   # (tick, bottles on the line, wall clock) at each look
 
     @classmethod
     def for_plant(cls, plant) -> PlantTally | None:
@@ -143,7 +170,23 @@ class PlantTally:
         return None
 
     def observe(self, tick: int) -> None:
+        if tick >= self.watch.due:   # a look: how many bottles are on the line, and the clock
+            on_line = int((self.world.positions[:, 2] > PARKED[2] / 2).sum())
+            self.looks.append((tick, on_line, time.perf_counter()))
         self.watch.observe(tick)
+
+    def _busy(self) -> tuple[int, int, Busy | None]:
+        """(most on the line, the tick of the first look that saw them, the run while ≥ 90 % of them were)."""
+        if not self.looks:
+            return 0, self.start, None
+        most, at = max((n, -tick) for tick, n, _ in self.looks)
+        at_least = math.ceil(BUSY * most)
+        sim = wall = 0.0
+        for (tick, n, clock), (later, _, then) in zip(self.looks, self.looks[1:]):
+            if n >= at_least:
+                sim += (later - tick) / self.rate
+                wall += then - clock
+        return most, -at, Busy(at_least, sim, wall) if most else None
 
     def summary(self) -> PlantSummary:
         """The summary at the world's tick now."""
@@ -173,6 +216,7 @@ class PlantTally:
         on_line = tuple(OnLine(world.labels[n], self.belts.get(int(f)) if f >= 0 else None,
                                tuple(world.positions[n].tolist()))
                         for n, f in zip(rows.tolist(), field.tolist()))
+        most, at, busy = self._busy()
         return PlantSummary(self.start / rate, world.tick / rate, len(self.placed), released, tuple(counts),
                             tuple(tick / rate for tick, _, _ in deliveries), misrouted, on_line,
-                            tuple(self.watch.jams()), self.jam_after)
+                            tuple(self.watch.jams()), self.jam_after, most, at / rate, busy)

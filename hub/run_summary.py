@@ -49,7 +49,10 @@ class RunSummary:
                f"  simulated    {self.sim_seconds:.3f} s  ({self.ticks} ticks at {rate} Hz, "
                f"communication step {1000 * self.substeps / rate:.4g} ms)"]
         if self.wall_seconds is not None:
-            out.append(f"  wall time    {self.wall_seconds:.3f} s  (real-time factor {self.realtime_factor:.1f}×)")
+            busy = self.plant.busy if self.plant is not None else None
+            full = (f"; {busy.realtime_factor:.1f}× while {busy.at_least} or more bottles were on the line, "
+                    f"{busy.sim_seconds:.1f} s" if busy is not None and busy.realtime_factor else "")
+            out.append(f"  wall time    {self.wall_seconds:.3f} s  (real-time factor {self.realtime_factor:.1f}×{full})")
         if self.plant is not None:   # a plant engineer's figures first, the event table after them
             out += plant_lines(self.plant)
         out.append(f"  events       {sum(s.count for s in self.events.values())}")
@@ -69,7 +72,8 @@ class RunSummary:
             "file": str(self.path),
             "simulated": {"seconds": self.sim_seconds, "ticks": self.ticks, "physics_rate": self.rate,
                           "communication_step": self.substeps / self.rate},
-            "wall": {"seconds": self.wall_seconds, "realtime_factor": self.realtime_factor},
+            "wall": {"seconds": self.wall_seconds, "realtime_factor": self.realtime_factor,
+                     "full_line": None if self.plant is None or self.plant.busy is None else self.plant.busy.as_dict()},
             "events": {slot: {"count": s.count, "first": s.first_tick / self.rate, "first_detail": s.first_detail}
                        for slot, s in self.events.items()},
             "files": self.files(),
@@ -105,7 +109,9 @@ def plant_lines(p: PlantSummary) -> list[str]:
             belts[b.belt or ""] = belts.get(b.belt or "", 0) + 1
         off = belts.pop("", 0)
         where = ", ".join([f"{name} {n}" for name, n in sorted(belts.items())] + ([f"off the belts {off}"] if off else []))
-    out.append(f"  on the line  {len(p.on_line)}  ({where})" if p.on_line else "  on the line  none")
+    most = f"; at most {p.most_on_line}, at {p.most_on_line_at:.1f} s" if p.most_on_line else ""
+    out.append(f"  on the line  {len(p.on_line)}  ({where}{most})" if p.on_line
+               else f"  on the line  none" + (f"  ({most[2:]})" if most else ""))
     steady = p.steady_per_minute
     pace = (f"; {steady:.2f} /min from the first delivery at {p.delivery_times[0]:.3f} s "
             f"to the last at {p.delivery_times[-1]:.3f} s" if steady is not None else "")

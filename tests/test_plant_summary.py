@@ -41,7 +41,15 @@ def test_source_sink_counts_bottles_in_and_out_by_destination(tmp_path):
     assert f"  delivered    6  ({counts})" in lines
     assert f"    sink     6  ({counts})" in lines
     assert "  misrouted    not judged (no sink says which destinations its lane is for: give sinks `accepts`)" in lines
-    assert "  on the line  none" in lines
+    most = plant["most_on_line"]
+    assert 2 <= most["bottles"] <= 6 and 0 < most["time"] < 6.5
+    assert f"  on the line  none  (at most {most['bottles']}, at {most['time']:.1f} s)" in lines
+    # The real-time factor while the line held 90 % of its most, as printed and in summary.json.
+    full = summary["wall"]["full_line"]
+    assert full["at_least"] == -(-9 * most["bottles"] // 10) and 0 < full["simulated_seconds"] <= 6.5
+    assert full["realtime_factor"] == full["simulated_seconds"] / full["wall_seconds"]
+    assert (f"; {full['realtime_factor']:.1f}× while {full['at_least']} or more bottles were on the line, "
+            f"{full['simulated_seconds']:.1f} s)") in next(line for line in lines if line.startswith("  wall time"))
     assert (f"  throughput   55.38 /min over 0–6.5 s  (6 delivered; {5 * 60 / (times[-1] - times[0]):.2f} /min "
             f"from the first delivery at {times[0]:.3f} s to the last at {times[-1]:.3f} s)") in lines
     assert f"  summary      {tmp_path / 'summary.json'}" in lines
@@ -87,7 +95,8 @@ def test_bottles_still_on_the_line_are_named_with_their_belt(tmp_path):
     assert plant["delivered"] == 0 and plant["bottles_in"] == len(plant["on_line"]) == 4
     assert [b["belt"] for b in plant["on_line"]] == ["belt"] * 4
     names = ", ".join(f"{b['bottle']} on belt" for b in plant["on_line"])
-    assert f"  on the line  4  ({names})" in stdout.splitlines()
+    assert plant["most_on_line"]["bottles"] == 4
+    assert f"  on the line  4  ({names}; at most 4, at {plant['most_on_line']['time']:.1f} s)" in stdout.splitlines()
 
 
 def test_a_scene_without_sinks_and_sources_keeps_the_plain_summary(tmp_path):
