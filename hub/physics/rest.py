@@ -7,9 +7,10 @@ bottle riding a belt to sleep — the belt is a force planthub applies, which wa
 every body is created with sleeping disabled and the hub decides, from the state it reads at
 every tick anyway:
 
-- A body may rest when it has been still (speed under `speed`, spin under `spin`) for `after`
-  seconds where nothing drives it — on no belt, or on a belt standing still — and is not held
-  by an arm, and when its box overlaps no awake body's box (see below).
+- A body may rest when it has been still (speed under `speed`, spin under `spin`, looked at
+  every `every` ticks) for `after` seconds where nothing drives it — on no belt, or on a belt
+  standing still — and is not held by an arm, and when its box overlaps no awake body's box
+  (see below; one left awake for that tries again `retry` ticks later).
 - A resting body is not read, driven or tested at any tick; its last pose stays in the state
   arrays and its velocity is zero, which is what the engine holds for a sleeping body.
 - It wakes when its belt's speed changes, when a switchable part overlapping it turns solid or
@@ -21,15 +22,15 @@ breaking threshold — holds an awake one. The hub widens the same boxes a littl
 the shapes' collision margins) and wakes the whole group of resting bodies whose boxes join
 an awake body's, before the engine steps. A resting body the engine moved behind the hub's
 back would show as a difference between its pose in the engine and in the arrays:
-`PhysicsWorld.check_rest` compares them at every tick (tests/physics/test_rest.py, and the
-bottling plant's window in tests/test_bottling_plant.py).
+`PhysicsWorld.check_rest` compares them at every tick (tests/physics/test_rest.py, and every
+run of tests/plant_watch.py, the bottling plant's among them).
 """
 from __future__ import annotations
 
 import numpy as np
 
 BREAKING = 0.02        # m: Bullet widens every box by its contact breaking threshold before the pair search
-SHAPE_MARGIN = 0.002   # m: above the exact box of a cylinder and a sphere for the shapes' margins (measured ≤ 1 mm)
+SHAPE_MARGIN = 0.002   # m: for the shapes' collision margins (the boxes hold the engine's within 3 mm, tested)
 
 
 def _quadratic_forms() -> np.ndarray:
