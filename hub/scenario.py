@@ -271,6 +271,8 @@ class _Checker:
             self.problem(("run", "orders"), f"{run.orders} orders, but no sink takes bottles out: "
                                             "add a `sink` object or leave out run.orders")
             return
+        if self.problems:
+            return   # a source with bad parameters cannot say what it holds; its problem is reported
         supply = sum(len(Source.bottles(obj.name, obj.params, run.seed)) for obj in objects
                      if obj.module_name == "source")
         if run.orders > supply:

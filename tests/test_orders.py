@@ -56,5 +56,20 @@ def test_orders_need_sinks_and_enough_bottles(write_scenario):
         f"  - {SOURCE_SINK}:{line_of_run(SOURCE_SINK)}: run.orders: 0 is less than the minimum of 1"]
 
 
+def test_orders_with_a_broken_source_report_the_source(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        run: {orders: 3}
+        objects:
+          belt: {module: conveyor, position: [0, 0, 0], length: 1.0}
+          source: {module: source, position: [0.05, 0, 0], count: many}
+          sink: {module: sink, position: [0.95, 0, 0.05]}
+        """)
+    with pytest.raises(ScenarioError) as caught:
+        load_scenario(path)
+    assert str(caught.value).splitlines()[1:] == [
+        f"  - {path}:5: objects.source.count: 'many' is not of type 'integer'"]
+
+
 def line_of_run(path) -> int:
     return next(n for n, line in enumerate(path.read_text().splitlines(), 1) if line.startswith("run:"))
