@@ -35,6 +35,27 @@ class Expectation:
         return f"{self.slot} {self.op} {self.value!r} {'at the end' if self.at is None else 'at tick ' + str(self.at)}"
 
 
+@dataclass(frozen=True)
+class NoJam:
+    """`jams: none`: no bottle jammed at any time of the run (the run summary's rule,
+    hub/jams.py, with run.jam_after), judged from the plant's jam watch after the run."""
+
+    name: str
+    line: int | None = None
+
+    def describe(self) -> str:
+        return "no bottle jams at any time"
+
+    def judge(self, jams, end: float) -> Outcome:
+        if not jams:
+            return Outcome(self, True, "held")
+        listed = "; ".join(f"{j.bottle} on {j.belt} from {j.since:.4g} s"
+                           + (f" to {j.until:.4g} s" if j.until is not None else f", still at {end:.4g} s")
+                           for j in jams[:10])
+        more = f"; … {len(jams) - 10} more" if len(jams) > 10 else ""
+        return Outcome(self, False, f"{len(jams)} jammed: {listed}{more}")
+
+
 @dataclass
 class Outcome:
     expectation: Expectation

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from .component import Component
+from .expectations import Expectation
 from .flow import Flow
 from .gauss_seidel import GaussSeidel
 from .module import DynamicObject
@@ -37,7 +38,8 @@ class Plant:
             self.signals = Signals(slots)
             read = {f.source for f in scenario.flows} | {f.rearm for f in scenario.flows if f.rearm}
             read |= {ref for ref, _ in scenario.record}
-            read |= {ref for e in scenario.expect for ref in (e.slot, e.when, e.show) if ref is not None}
+            read |= {ref for e in scenario.expect if isinstance(e, Expectation)
+                     for ref in (e.slot, e.when, e.show) if ref is not None}
             for comp, local in zip(self.components, local_indices):
                 needed = frozenset(r.slot for r in read if (r.obj, r.component) == (comp.obj, comp.name))
                 comp.bind(self.signals, local, needed)

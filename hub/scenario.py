@@ -11,7 +11,7 @@ import jsonschema
 
 from . import flowgraph
 from .errors import Problem, ScenarioError
-from .expectations import Expectation
+from .expectations import Expectation, NoJam
 from .flow import Condition, Mode
 from .logic import OPTIONS as LOGIC_OPTIONS
 from .logic import fmu_parameters
@@ -473,7 +473,19 @@ class _Checker:
         out = []
         for i, spec in enumerate(specs):
             at = ("expect", i)
-            if not isinstance(spec, dict) or not _is_ref(spec.get("slot")):
+            if not isinstance(spec, dict):
+                continue
+            if "jams" in spec:
+                others = sorted(set(spec) - {"name", "jams"})
+                if others:
+                    self.problem(at, f"`jams: none` stands alone (with a `name`), not with {', '.join(others)}")
+                elif spec["jams"] == "none":
+                    out.append(NoJam(spec.get("name") or "no jam", line_of(self.lines, at)))
+                continue
+            if "slot" not in spec:
+                self.problem(at, "give `slot` (a slot's value, with `is` or `always`) or `jams: none`")
+                continue
+            if not _is_ref(spec.get("slot")):
                 continue
             if ("is" in spec) == ("always" in spec):
                 self.problem(at, "give exactly one of `is` (a value at a time) and `always` (at every point)")

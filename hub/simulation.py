@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import Callable
 
 from .errors import PlanthubError
-from .expectations import Outcome, Watcher
+from .expectations import Expectation, NoJam, Outcome, Watcher
 from .master import Master, RunResult
 from .plant import Plant
 from .plant_summary import PlantTally
@@ -49,7 +49,8 @@ class Simulation:
             self.events: list[tuple[float, str, str]] = []
             self.recorder = _Recorder(columns, run.physics_rate, out, log=self.events)
             self.master = Master(self.plant, self.recorder)
-            self.watcher = Watcher(list(self.scenario.expect), self.plant.index, run.physics_rate)
+            slots = [e for e in self.scenario.expect if isinstance(e, Expectation)]
+            self.watcher = Watcher(slots, self.plant.index, run.physics_rate)
             self.tally = PlantTally.for_plant(self.plant)
             self.master.start()   # participants on the bus are launched and awaited here
             self.master.communicate()
@@ -121,8 +122,10 @@ class Simulation:
         raise PlanthubError(f"no slot {slot!r} in {self.scenario.path}{did_you_mean(slot, names)}")
 
     def check(self) -> list[Outcome]:
-        """The scenario's expectations judged on what was seen so far."""
-        return self.watcher.judge()
+        """The scenario's expectations judged on what was seen so far, in the scenario's order."""
+        on_slots = iter(self.watcher.judge())
+        jams = self.tally.summary().jams if self.tally is not None else ()
+        return [e.judge(jams, self.time) if isinstance(e, NoJam) else next(on_slots) for e in self.scenario.expect]
 
     def close(self) -> None:
         try:

@@ -3,10 +3,15 @@
     jam.yaml:            source ──► [==== feed ====]● ║ cross      P1 stands at the cross belt's rail
     stopper_queue.yaml:  source ──► [== belt ==●●●|stop|====] ──► sink    held 4 s, then let go
 """
+import subprocess
+import sys
+
 import pytest
 
 from hub import Simulation
+from hub.errors import ScenarioError
 from hub.jams import JamWatch
+from hub.scenario import load_scenario
 
 from .helpers import ROOT, planthub_run
 
@@ -72,3 +77,35 @@ def test_equal_runs_give_equal_summaries_and_the_api_agrees_with_the_cli(tmp_pat
     with Simulation(JAM) as sim:
         sim.run()
         assert sim.summary().plant.as_dict() == first["plant"]
+
+
+def test_hub_test_fails_a_jam_expected_away_and_names_the_bottle(write_scenario, tmp_path):
+    jam = write_scenario(JAM.read_text() + "\nexpect:\n  - {name: nothing jams, jams: none}\n")
+    proc = subprocess.run([sys.executable, "-m", "hub", "test", str(jam), "--junit", str(tmp_path / "j.xml")],
+                          capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 1, proc.stderr
+    (line,) = [line for line in proc.stdout.splitlines() if "nothing jams" in line]
+    assert line.startswith("  ✗ nothing jams — 1 jammed: P1 on feed from 1.9") and line.endswith(", still at 6 s")
+    assert "expected no bottle jams at any time: 1 jammed: P1 on feed" in (tmp_path / "j.xml").read_text()
+    held = write_scenario(STOPPER.read_text() + "\nexpect:\n  - {jams: none}\n", name="held.yaml")
+    with Simulation(held) as sim:
+        sim.run()
+        (outcome,) = sim.check()
+    assert outcome.passed and outcome.expectation.name == "no jam" and outcome.message == "held"
+
+
+def test_a_jam_expectation_is_checked_as_written(write_scenario):
+    path = write_scenario(JAM.read_text() + """
+expect:
+  - {jams: some}
+  - {jams: none, slot: sink.count.total}
+  - {name: alone}
+""")
+    with pytest.raises(ScenarioError) as caught:
+        load_scenario(path)
+    lines = len(JAM.read_text().splitlines())
+    assert str(caught.value).splitlines()[1:] == [
+        f"  - {path}:{lines + 3}: expect[0].jams: 'none' was expected",
+        f"  - {path}:{lines + 4}: expect[1]: `jams: none` stands alone (with a `name`), not with slot",
+        f"  - {path}:{lines + 5}: expect[2]: give `slot` (a slot's value, with `is` or `always`) or `jams: none`",
+    ]
