@@ -1,5 +1,11 @@
-"""The plant-element scenarios: each gives bit-identical files in every run (robot: tests/test_robot_arm.py)."""
+"""The plant-element scenarios: each gives bit-identical files in every run (robot: tests/test_robot_arm.py);
+every shipped scenario runs with the resting bottles checked against the engine."""
 import pytest
+
+from hub.master import Master
+from hub.plant import Plant
+from hub.recorder import Recorder
+from hub.scenario import load_scenario
 
 from .helpers import ROOT, run_scenario
 
@@ -11,3 +17,26 @@ def test_a_scenario_run_twice_gives_identical_files(tmp_path, name):
     run_scenario(path, tmp_path / "two")
     for file in ("recording.csv", "events.csv"):
         assert (tmp_path / "one" / file).read_bytes() == (tmp_path / "two" / file).read_bytes()
+
+
+# The shipped scenarios in which bottles come to rest (the others have none still long enough).
+RESTING = ["belt_ramp_fmu", "belt_ramp_participant", "robot", "robot_logic", "stop_at_barrier",
+           "two_drives_distributed"]
+
+
+@pytest.mark.parametrize("name", RESTING)
+def test_resting_bottles_stay_where_the_engine_holds_them(name):
+    """The scenario run with the world comparing every resting bottle with the engine at every
+    tick (hub/physics/rest.py); the bottling plant's: tests/test_bottling_plant.py."""
+    scenario = load_scenario(ROOT / "scenarios" / f"{name}.yaml")
+    with Plant(scenario) as plant:
+        world = plant.world
+        world.check_rest = True
+        most = 0
+
+        def look(tick, end):
+            nonlocal most
+            most = max(most, int(world.rest.resting.sum()))
+        with Master(plant, Recorder([], scenario.run.physics_rate)) as master:
+            result = master.run(progress=look)
+    assert result.ticks == scenario.run.end_tick and most >= 1
