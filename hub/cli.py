@@ -151,7 +151,8 @@ def _run(args) -> int:
     summary.write(out / "summary.json")
     print("\n".join(summary.lines()))
     if result.stopped_by:
-        print(f"  stopped      {result.stopped_by}")
+        ended = master.orders is not None and master.orders.done()   # its orders: a run's normal end
+        print(f"  {'ended' if ended else 'stopped':<12} {result.stopped_by}")
     if pacer is not None:
         print(f"  pacing       {pacer.summary()}")
     if master.dataplane is not None:

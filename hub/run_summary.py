@@ -109,9 +109,9 @@ def plant_lines(p: PlantSummary) -> list[str]:
             belts[b.belt or ""] = belts.get(b.belt or "", 0) + 1
         off = belts.pop("", 0)
         where = ", ".join([f"{name} {n}" for name, n in sorted(belts.items())] + ([f"off the belts {off}"] if off else []))
-    most = f"; at most {p.most_on_line}, at {p.most_on_line_at:.1f} s" if p.most_on_line else ""
-    out.append(f"  on the line  {len(p.on_line)}  ({where}{most})" if p.on_line
-               else f"  on the line  none" + (f"  ({most[2:]})" if most else ""))
+    most = f"at most {p.most_on_line}, at {p.most_on_line_at:.1f} s" if p.most_on_line else ""
+    details = "; ".join(part for part in (where, most) if part)
+    out.append(f"  on the line  {len(p.on_line) or 'none'}" + (f"  ({details})" if details else ""))
     steady = p.steady_per_minute
     pace = (f"; {steady:.2f} /min from the first delivery at {p.delivery_times[0]:.3f} s "
             f"to the last at {p.delivery_times[-1]:.3f} s" if steady is not None else "")

@@ -225,7 +225,8 @@ class _Checker:
         # The logic's own wiring comes first, so a scenario's flows into the same slot win.
         flows = self.wiring(objects, slot_tables) + self.flows(_list(data.get("flows")), slot_tables)
         record = self.record(_list(data.get("record")), slot_tables)
-        expect = self.expectations(_list(data.get("expect")), slot_tables, run)
+        plant = any(obj.module_name in ("source", "sink") for obj in objects)   # as PlantTally.for_plant
+        expect = self.expectations(_list(data.get("expect")), slot_tables, run, plant)
         order = self.order(flows, objects)
         if self.problems:
             raise ScenarioError(self.problems)
@@ -469,7 +470,7 @@ class _Checker:
                 out.append((r[0], r[1].type))
         return out
 
-    def expectations(self, specs: list, tables: dict, run: RunSettings) -> list[Expectation]:
+    def expectations(self, specs: list, tables: dict, run: RunSettings, plant: bool) -> list[Expectation | NoJam]:
         out = []
         for i, spec in enumerate(specs):
             at = ("expect", i)
@@ -479,6 +480,9 @@ class _Checker:
                 others = sorted(set(spec) - {"name", "jams"})
                 if others:
                     self.problem(at, f"`jams: none` stands alone (with a `name`), not with {', '.join(others)}")
+                elif not plant:
+                    self.problem(at + ("jams",), "jams are watched in a plant, a scenario with a source or a "
+                                                 "sink; this one has neither")
                 elif spec["jams"] == "none":
                     out.append(NoJam(spec.get("name") or "no jam", line_of(self.lines, at)))
                 continue

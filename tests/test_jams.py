@@ -9,11 +9,10 @@ import sys
 import pytest
 
 from hub import Simulation
-from hub.errors import ScenarioError
 from hub.jams import JamWatch
-from hub.scenario import load_scenario
 
 from .helpers import ROOT, planthub_run
+from .test_scenario_errors import problems
 
 JAM = ROOT / "scenarios" / "jam.yaml"
 STOPPER = ROOT / "scenarios" / "stopper_queue.yaml"
@@ -101,11 +100,22 @@ expect:
   - {jams: none, slot: sink.count.total}
   - {name: alone}
 """)
-    with pytest.raises(ScenarioError) as caught:
-        load_scenario(path)
     lines = len(JAM.read_text().splitlines())
-    assert str(caught.value).splitlines()[1:] == [
-        f"  - {path}:{lines + 3}: expect[0].jams: 'none' was expected",
-        f"  - {path}:{lines + 4}: expect[1]: `jams: none` stands alone (with a `name`), not with slot",
-        f"  - {path}:{lines + 5}: expect[2]: give `slot` (a slot's value, with `is` or `always`) or `jams: none`",
+    assert problems(path)[0] == [
+        f"{path}:{lines + 3}: expect[0].jams: 'none' was expected",
+        f"{path}:{lines + 4}: expect[1]: `jams: none` stands alone (with a `name`), not with slot",
+        f"{path}:{lines + 5}: expect[2]: give `slot` (a slot's value, with `is` or `always`) or `jams: none`",
     ]
+
+
+def test_a_jam_expectation_needs_a_plant(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        objects:
+          belt: {module: conveyor, position: [0, 0, 0], length: 1.0}
+          bottle: {module: bottle, position: [0.04, 0, 0]}
+        expect:
+          - {jams: none}
+        """)
+    assert problems(path)[0] == [
+        f"{path}:6: expect[0].jams: jams are watched in a plant, a scenario with a source or a sink; this one has neither"]

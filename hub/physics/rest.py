@@ -190,7 +190,7 @@ class Rest:
         gap = np.abs(positions[awake][:, None, :] - centres[None, :, :]) - extents[None, :, :]
         return awake[(gap < reach[:, None, None]).all(axis=2).any(axis=1)]
 
-    def put(self, rows: np.ndarray, positions, orientations, fields: np.ndarray) -> None:
+    def put(self, rows: np.ndarray, orientations, fields: np.ndarray) -> None:
         self.resting[rows] = True
         self.extents[rows] = self.boxes(rows, orientations)
         self.fields[rows] = fields

@@ -541,7 +541,7 @@ class PhysicsWorld:
             for b in (self._bodies[n] for n in candidates.tolist()):
                 self._call(pybullet.changeDynamics, b, -1, activationState=pybullet.ACTIVATION_STATE_ENABLE_SLEEPING)
                 self._call(pybullet.changeDynamics, b, -1, activationState=pybullet.ACTIVATION_STATE_SLEEP)
-            self.rest.put(candidates, self.positions, self.orientations, field[np.searchsorted(rows, candidates)])
+            self.rest.put(candidates, self.orientations, field[np.searchsorted(rows, candidates)])
             # What the engine holds for a sleeping body from its next tick on.
             self.velocities[candidates] = 0.0
             self.angular_velocities[candidates] = 0.0
