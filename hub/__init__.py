@@ -6,7 +6,7 @@
 def __getattr__(name):
     # Imported on first use, so `import hub` stays light for the modules that build on it.
     if name == "Simulation":
-        from .simulation import Simulation
+        from hub.run.simulation import Simulation
 
         return Simulation
     raise AttributeError(f"module 'hub' has no attribute {name!r}")

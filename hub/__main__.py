@@ -1,6 +1,6 @@
 """`python -m hub` runs the command line."""
 import sys
 
-from .cli import main
+from hub.cli.main import main
 
 sys.exit(main())

@@ -17,14 +17,14 @@ from __future__ import annotations
 
 import math
 
-from hub.component import Component
-from hub.errors import Problem, ScenarioError
-from hub.logic import LogicSpec
+from hub.core.component import Component
+from hub.core.errors import Problem, ScenarioError
+from hub.core.logic_spec import LogicSpec
 from hub.physics.frames import Arc, Pose, Straight
-from hub.registry import did_you_mean
-from hub.slots import Slot
+from hub.core.registry import did_you_mean
+from hub.core.slots import Slot
 
-from .params import POSITION, length
+from modules.params import POSITION, length
 
 RAIL_THICKNESS = 0.01
 SUPPORT_THICKNESS = 0.02

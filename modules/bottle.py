@@ -31,11 +31,11 @@ from __future__ import annotations
 
 import math
 
-from hub.component import Component
-from hub.module import Module
-from hub.slots import Slot
+from hub.core.component import Component
+from hub.core.module import Module
+from hub.core.slots import Slot
 
-from .params import POSITION, length
+from modules.params import POSITION, length
 
 
 class BottleBody(Component):

@@ -12,9 +12,9 @@ within one step fire once.
 """
 from __future__ import annotations
 
-from hub.component import Component
-from hub.module import Module
-from hub.slots import Slot
+from hub.core.component import Component
+from hub.core.module import Module
+from hub.core.slots import Slot
 
 
 class Clock(Component):

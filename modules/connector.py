@@ -11,9 +11,9 @@ ring form a zero-delay loop, which the scenario check rejects.
 """
 from __future__ import annotations
 
-from hub.component import Component
-from hub.module import Module
-from hub.slots import Slot
+from hub.core.component import Component
+from hub.core.module import Module
+from hub.core.slots import Slot
 
 
 class Logic(Component):

@@ -11,9 +11,9 @@ The value follows `set` within the same step, so a sensor event can stop a belt 
 """
 from __future__ import annotations
 
-from hub.component import Component
-from hub.module import Module
-from hub.slots import Slot, SlotType
+from hub.core.component import Component
+from hub.core.module import Module
+from hub.core.slots import Slot, SlotType
 
 
 class Value(Component):

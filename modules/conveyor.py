@@ -12,12 +12,12 @@ Start it at `position`/`yaw`, or `after: NAME` to continue the belt NAME (see mo
 """
 from __future__ import annotations
 
-from hub.module import Module
+from hub.core.module import Module
 from hub.physics.frames import Straight
 
-from .belt import LOGIC as BELT_LOGIC
-from .belt import COMMON, PLACEMENT, BeltDrive, build_segment, check_placement, start_pose
-from .params import length
+from modules.belt import LOGIC as BELT_LOGIC
+from modules.belt import COMMON, PLACEMENT, BeltDrive, build_segment, check_placement, start_pose
+from modules.params import length
 
 __all__ = ["Conveyor", "BeltDrive"]
 

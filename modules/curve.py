@@ -18,12 +18,12 @@ from __future__ import annotations
 
 import math
 
-from hub.module import Module
+from hub.core.module import Module
 from hub.physics.frames import Arc
 
-from .belt import LOGIC as BELT_LOGIC
-from .belt import COMMON, PLACEMENT, RAIL_THICKNESS, BeltDrive, build_segment, check_placement, start_pose
-from .params import length
+from modules.belt import LOGIC as BELT_LOGIC
+from modules.belt import COMMON, PLACEMENT, RAIL_THICKNESS, BeltDrive, build_segment, check_placement, start_pose
+from modules.params import length
 
 
 class Curve(Module):

@@ -23,79 +23,17 @@ from __future__ import annotations
 import re
 import sys
 
-from hub.component import Component
-from hub.fmu import FmuError, FmuSlave, inspect_fmu
-from hub.fmu_process import IsolatedFmu
-from hub.lockstep import RemoteSlave, RemoteSpec
-from hub.logic import own_step_problems
-from hub.module import Module
-from hub.registry import did_you_mean
-from hub.slots import Slot, SlotType
+from hub.bus.lockstep import RemoteSpec
+from hub.logic.component import LogicComponent
+from hub.logic.factory import SlavePlan, make_slave
+from hub.logic.fmi import FmuError, inspect_fmu
+from hub.logic.ports import fmu_ports
+from hub.core.logic_spec import own_step_problems
+from hub.core.module import Module
+from hub.core.registry import did_you_mean
+from hub.core.slots import Slot, SlotType
 
 _SLOT_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-
-
-class FmuLogic(Component):
-    """Steps its FMU over the master's communication steps, or over its own longer `every` ticks.
-
-    Jacobi in both cases: the FMU steps from t with the inputs it got at t, and its new outputs
-    are held back until the point at t + h, so the result does not depend on when the master
-    calls it in between. They are fetched only there (`slave.outputs()`), so logic served by a
-    participant computes while the hub goes on: the step is sent in `step`, collected in `sense`.
-    """
-
-    def __init__(self, obj, name, slots, slave, inputs, outputs, rate: int, every: int | None):
-        super().__init__(obj, name)
-        self.SLOTS = slots
-        self.slave = slave
-        self.inputs = inputs      # [(slot name, is event)] in the FMU's input order
-        self.outputs = outputs    # [(slot name, is event)] in the FMU's output order
-        self.rate = rate
-        self.every = every        # own step in ticks, or None: every master step
-        self.latest = None        # outputs in use; fetched at the first point
-        self.ready_at = None      # the tick at which the last step's outputs are due
-        self._reads = ()          # (slot number, is event) per input, in the FMU's order
-        self._writes = ()         # (slot number, is event) per output
-
-    def bind(self, signals, index, needed):
-        super().bind(signals, index, needed)
-        # Slot numbers resolved once: sense and step run at every point for every logic object.
-        self._reads = tuple((index[slot], event) for slot, event in self.inputs)
-        self._writes = tuple((index[slot], event) for slot, event in self.outputs)
-
-    def sense(self, tick):
-        if self.latest is None or (self.ready_at is not None and tick >= self.ready_at):
-            self.latest, self.ready_at = self.slave.outputs(), None
-        signals = self.signals
-        values, active = signals.values, signals.active
-        for (i, event), value in zip(self._writes, self.latest):   # Signals.emit, inlined
-            if not event:
-                if value is not None:
-                    values[i] = value
-                active[i] = True
-            elif value:
-                active[i] = True
-
-    def step(self, tick, ticks):
-        if self.every is not None:
-            if tick % self.every:
-                return   # between two of its own points: it already stepped over this interval
-            ticks = self.every
-        signals = self.signals
-        updated, values = signals.updated, signals.values
-        self.slave.set_inputs([updated[i] if event else values[i] for i, event in self._reads])
-        self.slave.step(tick / self.rate, ticks / self.rate)
-        self.ready_at = tick + ticks
-
-    def emit_ready(self, tick):
-        if self.ready_at != tick:
-            return False   # stepping on its own grid: its outputs belong to a later point
-        self.latest, self.ready_at = self.slave.outputs(), None
-        self.sense(tick)
-        return True
-
-    def close(self):
-        self.slave.close()
 
 
 class Fmu(Module):
@@ -125,7 +63,7 @@ class Fmu(Module):
         "required": ["file"],
         "additionalProperties": False,
     }
-    COMPONENTS = {"logic": FmuLogic}
+    COMPONENTS = {"logic": LogicComponent}
 
     @classmethod
     def check(cls, params):
@@ -178,18 +116,7 @@ class Fmu(Module):
     def slots(cls, params):
         if "file" not in params:
             return {"logic": ()}
-        return {"logic": tuple(s for s, _ in cls._ports(params, inspect_fmu(params["file"])))}
-
-    @classmethod
-    def _ports(cls, params, fmu):
-        """(slot, variable name) for every input then every output, in the FMU's order."""
-        out = []
-        events, names = set(params.get("events", ())), params.get("map", {})
-        for causality, make in (("input", Slot.target), ("output", Slot.source)):
-            for v in fmu.of(causality):
-                kind = "void" if v.name in events else v.type.value
-                out.append((make(names.get(v.name, v.name), kind, v.description), v.name))
-        return out
+        return {"logic": tuple(s for s, _ in fmu_ports(inspect_fmu(params["file"]), params.get("events", ()), params.get("map", {})))}
 
     @classmethod
     def serve_command(cls, params) -> list[str]:
@@ -203,24 +130,20 @@ class Fmu(Module):
         return command
 
     @classmethod
-    def _remote(cls, name, params, fmu, inputs, outputs, parameters) -> RemoteSpec:
-        return RemoteSpec(name, tuple((s.name, s.type) for s, _ in inputs), tuple((s.name, s.type) for s, _ in outputs),
-                          parameters, tuple(cls.serve_command(params)) if params["participant"] == "launch" else None,
-                          None, float(params["join_timeout"]), f"FMU {fmu.path.name}")
-
-    @classmethod
     def build(cls, name, params, world):
         fmu = inspect_fmu(params["file"])
-        ports = cls._ports(params, fmu)
+        ports = fmu_ports(fmu, params["events"], params["map"])
         inputs = [(s, v) for s, v in ports if fmu.variables[v].causality == "input"]
         outputs = [(s, v) for s, v in ports if fmu.variables[v].causality == "output"]
         parameters = {k: fmu.variables[k].type.coerce(v) for k, v in params["parameters"].items()}
-        if "participant" in params:
-            slave = RemoteSlave(cls._remote(name, params, fmu, inputs, outputs, parameters), world.rate)
-        else:
-            runner = IsolatedFmu if params["isolate"] else FmuSlave
-            slave = runner(fmu, name, [v for _, v in inputs], [v for _, v in outputs], parameters)
+        launch = params.get("participant") == "launch"
+        spec = RemoteSpec(name, tuple((s.name, s.type) for s, _ in inputs), tuple((s.name, s.type) for s, _ in outputs),
+                          parameters, tuple(cls.serve_command(params)) if launch else None,
+                          None, float(params["join_timeout"]), f"FMU {fmu.path.name}")
+        transport = "bus" if "participant" in params else "child" if params["isolate"] else "hub"
+        slave = make_slave(SlavePlan(transport, spec, fmu=fmu, variables=(tuple(v for _, v in inputs),
+                                                                           tuple(v for _, v in outputs))), world.rate)
         as_pairs = lambda pairs: [(s.name, s.type is SlotType.VOID) for s, _ in pairs]
         every = round(params["step"] * world.rate) if "step" in params else None
-        return {"logic": FmuLogic(name, "logic", tuple(s for s, _ in ports), slave,
-                                  as_pairs(inputs), as_pairs(outputs), world.rate, every)}
+        return {"logic": LogicComponent(name, "logic", tuple(s for s, _ in ports), slave,
+                                        as_pairs(inputs), as_pairs(outputs), world.rate, every)}

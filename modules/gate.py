@@ -30,9 +30,9 @@ import math
 
 import numpy as np
 
-from hub.component import Component
+from hub.core.component import Component
 from hub.physics.frames import Boxes
-from hub.slots import Slot
+from hub.core.slots import Slot
 
 # A bottle must keep this far from a gate's boxes for it to close. Only overlap at the moment
 # of switching is harmful: a bottle that runs into the gate in the next tick is stopped by the

@@ -21,11 +21,11 @@ every one.
 """
 from __future__ import annotations
 
-from hub.module import Module
-from hub.slots import Slot
+from hub.core.module import Module
+from hub.core.slots import Slot
 
-from .manifest import cargo
-from .trigger import VolumeTrigger, add_volume, volume_parameters
+from modules.manifest import cargo
+from modules.trigger import VolumeTrigger, add_volume, volume_parameters
 
 
 class IdTrigger(VolumeTrigger):

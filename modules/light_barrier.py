@@ -13,9 +13,9 @@ an object that enters and leaves between two communication points gives both eve
 """
 from __future__ import annotations
 
-from hub.module import Module
+from hub.core.module import Module
 
-from .trigger import VolumeTrigger, add_volume, volume_parameters
+from modules.trigger import VolumeTrigger, add_volume, volume_parameters
 
 
 class LightBarrier(Module):

@@ -18,16 +18,12 @@ input is true in the steps a flow fed it; a void output true fires the event.
 """
 from __future__ import annotations
 
-import contextlib
-import sys
-from pathlib import Path
-
-from hub.inprocess import InProcessSlave, make_logic
-from hub.lockstep import RemoteSlave, RemoteSpec
-from hub.logic import own_step_problems
-from hub.module import Module
-from hub.slots import Slot, SlotType
-from modules.fmu import FmuLogic
+from hub.bus.lockstep import RemoteSpec
+from hub.logic.component import LogicComponent
+from hub.logic.factory import SlavePlan, make_slave
+from hub.core.logic_spec import own_step_problems
+from hub.core.module import Module
+from hub.core.slots import Slot, SlotType
 
 _NAME = "^[A-Za-z_][A-Za-z0-9_]*$"
 _TYPES = [t.value for t in SlotType]
@@ -59,7 +55,7 @@ class ParticipantModule(Module):
         },
         "additionalProperties": False,
     }
-    COMPONENTS = {"logic": FmuLogic}
+    COMPONENTS = {"logic": LogicComponent}
 
     @classmethod
     def check(cls, params):
@@ -89,28 +85,10 @@ class ParticipantModule(Module):
             command = ("python", "-m", *params["python"])
         spec = RemoteSpec(name, inputs, outputs, dict(params["parameters"]), command, params["cwd"],
                           float(params["join_timeout"]))
-        if params["in_process"]:
-            module, *argv = params["python"]
-            with _importable(params["cwd"]):
-                logic = make_logic(module, argv, f"{spec.label} (in-process)")
-            slave = InProcessSlave(spec, logic)
-        else:
-            slave = RemoteSlave(spec, world.rate)
+        plan = SlavePlan("hub", spec, python=tuple(params["python"])) if params["in_process"] else SlavePlan("bus", spec)
+        slave = make_slave(plan, world.rate)
         as_pairs = lambda pairs: [(n, k is SlotType.VOID) for n, k in pairs]
         every = round(params["step"] * world.rate) if "step" in params else None
-        return {"logic": FmuLogic(name, "logic", cls.slots(params)["logic"], slave,
+        return {"logic": LogicComponent(name, "logic", cls.slots(params)["logic"], slave,
                                   as_pairs(inputs), as_pairs(outputs), world.rate, every)}
 
-
-@contextlib.contextmanager
-def _importable(folder: str):
-    """Modules in `folder` (where a launched participant would run) import, as they would there."""
-    folder = str(Path(folder).resolve())
-    added = folder not in sys.path
-    if added:
-        sys.path.insert(0, folder)
-    try:
-        yield
-    finally:
-        if added:
-            sys.path.remove(folder)

@@ -46,15 +46,15 @@ from collections import deque
 
 import numpy as np
 
-from hub.component import Component
-from hub.errors import SimulationError
-from hub.logic import LogicSpec
-from hub.module import Module
+from hub.core.component import Component
+from hub.core.errors import SimulationError
+from hub.core.logic_spec import LogicSpec
+from hub.core.module import Module
 from hub.physics.robot import JointMotion, reachable
-from hub.slots import Slot
+from hub.core.slots import Slot
 
-from .params import POSITION, YAW, length
-from .trigger import VolumeTrigger
+from modules.params import POSITION, YAW, length
+from modules.trigger import VolumeTrigger
 
 CLEARANCE = 0.002   # m between a placed bottle's base and the surface when it is let go
 

@@ -51,11 +51,11 @@ from __future__ import annotations
 
 import math
 
-from hub.logic import LogicSpec
-from hub.module import Module
+from hub.core.logic_spec import LogicSpec
+from hub.core.module import Module
 
-from .gate import GATE_PARAMETERS, Gate, along, gate_across
-from .params import POSITION, YAW
+from modules.gate import GATE_PARAMETERS, Gate, along, gate_across
+from modules.params import POSITION, YAW
 
 
 def pitch(params) -> float:

@@ -28,12 +28,12 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from hub.component import Component
-from hub.module import Module
-from hub.slots import Slot
+from hub.core.component import Component
+from hub.core.module import Module
+from hub.core.slots import Slot
 
-from .manifest import cargo
-from .trigger import add_volume, volume_parameters
+from modules.manifest import cargo
+from modules.trigger import add_volume, volume_parameters
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _RESERVED = ("total", "other", "misrouted")

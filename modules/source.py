@@ -27,13 +27,13 @@ import zlib
 
 import numpy as np
 
-from hub.component import Component
-from hub.errors import SimulationError
-from hub.module import Module
-from hub.slots import Slot
+from hub.core.component import Component
+from hub.core.errors import SimulationError
+from hub.core.module import Module
+from hub.core.slots import Slot
 
-from .manifest import register
-from .params import POSITION, length
+from modules.manifest import register
+from modules.params import POSITION, length
 
 
 class Store(Component):

@@ -19,12 +19,12 @@ from __future__ import annotations
 
 import math
 
-from hub.component import Component
-from hub.module import Module
-from hub.slots import Slot
+from hub.core.component import Component
+from hub.core.module import Module
+from hub.core.slots import Slot
 
-from .manifest import cargo
-from .trigger import add_volume, volume_parameters
+from modules.manifest import cargo
+from modules.trigger import add_volume, volume_parameters
 
 OPERATIONS = {"fill": "filled", "cap": "capped"}
 

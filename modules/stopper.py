@@ -17,10 +17,10 @@ from __future__ import annotations
 
 import math
 
-from hub.module import Module
+from hub.core.module import Module
 
-from .gate import GATE_PARAMETERS, Gate, gate_across
-from .params import POSITION, YAW
+from modules.gate import GATE_PARAMETERS, Gate, gate_across
+from modules.params import POSITION, YAW
 
 
 class Stopper(Module):

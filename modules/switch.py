@@ -34,15 +34,15 @@ from __future__ import annotations
 
 import math
 
-from hub.logic import LogicSpec
-from hub.module import Module
+from hub.core.logic_spec import LogicSpec
+from hub.core.module import Module
 from hub.physics.frames import Arc, Pose, Straight
-from hub.slots import Slot
+from hub.core.slots import Slot
 
-from .belt import (COMMON, K_DEFAULT, PLACEMENT, RAIL_THICKNESS, SUPPORT_THICKNESS, BeltDrive, arc_rail,
+from modules.belt import (COMMON, K_DEFAULT, PLACEMENT, RAIL_THICKNESS, SUPPORT_THICKNESS, BeltDrive, arc_rail,
                    build_segment, check_placement, start_pose)
-from .gate import Blocker, TwoPositions
-from .params import length
+from modules.gate import Blocker, TwoPositions
+from modules.params import length
 
 SIDES = {"left": 1, "right": -1}
 

@@ -15,10 +15,10 @@ from __future__ import annotations
 
 import math
 
-from hub.component import Component
-from hub.slots import Slot
+from hub.core.component import Component
+from hub.core.slots import Slot
 
-from .params import POSITION, YAW
+from modules.params import POSITION, YAW
 
 
 def volume_parameters(size: list[float], what: str) -> dict:

@@ -12,10 +12,10 @@ import tempfile
 import time
 from pathlib import Path
 
-from hub.master import Master
-from hub.plant import Plant
-from hub.recorder import Recorder
-from hub.scenario import load_scenario
+from hub.run.master import Master
+from hub.run.plant import Plant
+from hub.run.recorder import Recorder
+from hub.scenario.checker import load_scenario
 
 from .bench_plant import plant_elements
 from .helpers import ROOT
@@ -113,7 +113,7 @@ class PythonBeltDrive:
 
 
 def fmu_stepping() -> None:
-    from hub.fmu import FmuSlave, inspect_fmu
+    from hub.logic.fmi import FmuSlave, inspect_fmu
 
     print("\n## Logic stepping: N belt_drive instances per communication step (set inputs, doStep, get outputs)\n")
     print("| instances | FMI 2.0 FMU µs/step | FMI 3.0 FMU µs/step | plain Python µs/step | FMI 2.0 / Python |")

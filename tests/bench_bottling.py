@@ -16,11 +16,11 @@ import time
 
 import numpy as np
 
-from hub.master import Master
+from hub.run.master import Master
 from hub.physics.world import pybullet
-from hub.plant import Plant
-from hub.recorder import Recorder
-from hub.scenario import load_scenario
+from hub.run.plant import Plant
+from hub.run.recorder import Recorder
+from hub.scenario.checker import load_scenario
 from modules.sink import Bin
 
 from .helpers import ROOT

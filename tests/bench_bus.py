@@ -9,11 +9,12 @@ import tempfile
 import time
 from pathlib import Path
 
-from hub.bus import Bus, Inbox, wait_until
-from hub.master import Master
-from hub.plant import Plant
-from hub.recorder import Recorder
-from hub.scenario import BusSettings, load_scenario
+from hub.bus.session import Bus, Inbox, wait_until
+from hub.run.master import Master
+from hub.run.plant import Plant
+from hub.run.recorder import Recorder
+from hub.bus.settings import BusSettings
+from hub.scenario.checker import load_scenario
 
 from .helpers import ROOT
 

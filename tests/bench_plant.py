@@ -6,11 +6,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from hub.master import Master
+from hub.run.master import Master
 from hub.physics import PhysicsWorld
 from hub.physics.robot import JointMotion
-from hub.plant import Plant
-from hub.scenario import load_scenario
+from hub.run.plant import Plant
+from hub.scenario.checker import load_scenario
 
 REPEATS = 5
 TICKS = 1500

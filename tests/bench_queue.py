@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from hub.master import Master
+from hub.run.master import Master
 from hub.physics import PhysicsWorld
-from hub.plant import Plant
-from hub.scenario import load_scenario
+from hub.run.plant import Plant
+from hub.scenario.checker import load_scenario
 
 from .helpers import ROOT
 from .plant_watch import run_watched

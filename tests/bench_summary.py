@@ -9,10 +9,10 @@ from pathlib import Path
 
 import yaml
 
-from hub.master import Master
-from hub.plant import Plant
-from hub.plant_summary import PlantTally
-from hub.scenario import load_scenario
+from hub.run.master import Master
+from hub.run.plant import Plant
+from modules.plant.summary import PlantTally
+from hub.scenario.checker import load_scenario
 
 
 

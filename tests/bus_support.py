@@ -8,11 +8,11 @@ import subprocess
 import sys
 from pathlib import Path
 
-from hub.commands import Commands, load_commands
-from hub.master import Master
-from hub.plant import Plant
-from hub.recorder import Recorder
-from hub.scenario import load_scenario
+from hub.bus.commands import Commands, load_commands
+from hub.run.master import Master
+from hub.run.plant import Plant
+from hub.run.recorder import Recorder
+from hub.scenario.checker import load_scenario
 
 from .helpers import ROOT
 

@@ -6,10 +6,10 @@ import subprocess
 import sys
 from pathlib import Path
 
-from hub.master import Master
-from hub.plant import Plant
-from hub.recorder import Recorder
-from hub.scenario import load_scenario
+from hub.run.master import Master
+from hub.run.plant import Plant
+from hub.run.recorder import Recorder
+from hub.scenario.checker import load_scenario
 
 ROOT = Path(__file__).resolve().parent.parent
 

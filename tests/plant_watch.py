@@ -7,10 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
-from hub.master import Master
-from hub.plant import Plant
-from hub.recorder import Recorder
-from hub.scenario import load_scenario
+from hub.run.master import Master
+from hub.run.plant import Plant
+from hub.run.recorder import Recorder
+from hub.scenario.checker import load_scenario
 from modules.gate import TwoPositions
 from modules.robot_arm import Gripper
 

@@ -7,10 +7,10 @@ import sys
 
 import pytest
 
-from hub.errors import ScenarioError
-from hub.logic import LogicSpec
-from hub.registry import Registry
-from hub.scenario import load_scenario
+from hub.core.errors import ScenarioError
+from hub.core.logic_spec import LogicSpec
+from hub.core.registry import Registry
+from hub.scenario.checker import load_scenario
 from modules import CATALOGUE
 from modules.conveyor import Conveyor
 

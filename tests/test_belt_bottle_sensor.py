@@ -11,7 +11,7 @@ import sys
 
 import pytest
 
-from hub.scenario import load_scenario
+from hub.scenario.checker import load_scenario
 
 from .helpers import ROOT, run_scenario
 

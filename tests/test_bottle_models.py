@@ -5,9 +5,9 @@
 import numpy as np
 import pytest
 
-from hub.errors import ScenarioError
+from hub.core.errors import ScenarioError
 from hub.reports.runs import pitch, run
-from hub.scenario import load_scenario
+from hub.scenario.checker import load_scenario
 
 SCENE = """
     planthub: 1

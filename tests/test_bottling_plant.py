@@ -7,7 +7,7 @@ import csv
 import subprocess
 import sys
 
-from hub.scenario import load_scenario
+from hub.scenario.checker import load_scenario
 from modules.source import Source
 
 from .helpers import ROOT, planthub_run, run_scenario

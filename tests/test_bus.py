@@ -4,8 +4,8 @@ import socket
 
 import pytest
 
-from hub.bus import Bus, BusError, Inbox, free_loopback_endpoint, local_endpoint
-from hub.scenario import BusSettings
+from hub.bus.session import Bus, BusError, Inbox, free_loopback_endpoint, local_endpoint
+from hub.bus.settings import BusSettings
 
 
 @pytest.fixture
@@ -77,14 +77,14 @@ def test_local_endpoint_for_a_wildcard_listener():
 
 
 def wait_for(condition, timeout=5.0):
-    from hub.bus import wait_until
+    from hub.bus.session import wait_until
 
     return wait_until(condition, timeout)
 
 
 def test_a_bad_bus_section_is_reported_with_the_scenario_problems(write_scenario):
-    from hub.errors import ScenarioError
-    from hub.scenario import load_scenario
+    from hub.core.errors import ScenarioError
+    from hub.scenario.checker import load_scenario
 
     path = write_scenario("""
         planthub: 1
@@ -102,7 +102,7 @@ def test_a_bad_bus_section_is_reported_with_the_scenario_problems(write_scenario
 
 
 def test_the_bus_section_with_its_defaults(write_scenario):
-    from hub.scenario import load_scenario
+    from hub.scenario.checker import load_scenario
 
     path = write_scenario("""
         planthub: 1

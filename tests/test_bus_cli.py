@@ -4,7 +4,7 @@ import sys
 
 import pytest
 
-from hub.bus import free_loopback_endpoint
+from hub.bus.session import free_loopback_endpoint
 
 from .bus_support import process, same_files
 from .fmus.fmu_support import build

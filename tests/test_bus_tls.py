@@ -6,10 +6,11 @@ as over tcp; a participant without the right authority or certificate cannot joi
 import pytest
 import trustme
 
-from hub.bus import Bus, BusError, free_loopback_endpoint
-from hub.errors import ScenarioError, SimulationError
-from hub.scenario import BusSettings, load_scenario
-from hub.tls import TlsSettings
+from hub.bus.session import Bus, BusError, free_loopback_endpoint
+from hub.core.errors import ScenarioError, SimulationError
+from hub.bus.settings import BusSettings
+from hub.scenario.checker import load_scenario
+from hub.bus.tls import TlsSettings
 
 from .bus_support import BELT_FMU, BELT_PARTICIPANT, hub, output_of, process, same_files
 from .helpers import run_scenario
@@ -143,7 +144,7 @@ def own(certs, name) -> TlsSettings:
 def test_under_access_control_a_certificate_not_named_may_watch_but_not_command(certs, tmp_path):
     """Zenoh drops what access control denies without a word: the command gets no answer and the
     run goes to its end, while the samples the HMI watches keep coming."""
-    from hub.errors import PlanthubError
+    from hub.core.errors import PlanthubError
     from hub.live import Viewer
 
     with Bus(hub_settings(certs, control=("plc",))) as bus, hub(BELT_FMU, tmp_path, bus=bus) as master, \

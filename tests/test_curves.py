@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from hub.errors import ScenarioError
-from hub.plant import Plant
+from hub.core.errors import ScenarioError
+from hub.run.plant import Plant
 from hub.reports.runs import run
-from hub.scenario import load_scenario
+from hub.scenario.checker import load_scenario
 
 S_BEND = """
     planthub: 1

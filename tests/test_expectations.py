@@ -6,8 +6,8 @@ from xml.etree import ElementTree
 import pytest
 
 from hub import Simulation
-from hub.errors import PlanthubError, ScenarioError
-from hub.scenario import load_scenario
+from hub.core.errors import PlanthubError, ScenarioError
+from hub.scenario.checker import load_scenario
 
 from .fmus.fmu_support import build
 from .helpers import ROOT

@@ -1,9 +1,9 @@
 """Flow rules: the four execution conditions, continuous and singular mode, re-arming."""
 import pytest
 
-from hub.flow import Condition, Flow, Mode
-from hub.signals import Signals
-from hub.slots import Slot
+from hub.core.flow import Condition, Flow, Mode
+from hub.core.signals import Signals
+from hub.core.slots import Slot
 
 SOURCE, TARGET, REARM = 0, 1, 2
 

@@ -1,5 +1,5 @@
 """Evaluation order of flows and feedthrough components, and zero-delay loop detection."""
-from hub.flowgraph import Feedthrough, FlowEdge, plan
+from hub.core.flowgraph import Feedthrough, FlowEdge, plan
 
 
 def connector(key):

@@ -5,8 +5,8 @@ import zipfile
 
 import pytest
 
-from hub.errors import ScenarioError, SimulationError
-from hub.scenario import load_scenario
+from hub.core.errors import ScenarioError, SimulationError
+from hub.scenario.checker import load_scenario
 
 from .fmus.fmu_support import build
 from .helpers import ROOT, run_scenario

@@ -2,7 +2,7 @@
 bit for bit, as the same logic launched as a process on the bus; its faults named as over the bus."""
 import pytest
 
-from hub.errors import PlanthubError, SimulationError
+from hub.core.errors import PlanthubError, SimulationError
 
 from .helpers import ROOT, run_scenario
 

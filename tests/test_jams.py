@@ -9,7 +9,7 @@ import sys
 import pytest
 
 from hub import Simulation
-from hub.jams import JamWatch
+from modules.plant.jams import JamWatch
 
 from .helpers import ROOT, planthub_run
 from .test_scenario_errors import problems

@@ -8,12 +8,13 @@ import csv
 
 import pytest
 
-from hub.bus import Bus, wait_until
-from hub.commands import CommandError, Commands
+from hub.bus.session import Bus, wait_until
+from hub.bus.commands import CommandError, Commands
 from hub.live import Viewer
-from hub.plant import Plant
-from hub.recorder import Recorder
-from hub.scenario import BusSettings, load_scenario
+from hub.run.plant import Plant
+from hub.run.recorder import Recorder
+from hub.bus.settings import BusSettings
+from hub.scenario.checker import load_scenario
 
 from .bus_support import BELT_FMU, hub, same_files
 from .fmus.fmu_support import build

@@ -2,10 +2,10 @@
 as a pure-Python participant gives the same recording, byte for byte; joining is checked and named."""
 import pytest
 
-from hub.bus import Bus, wait_until
-from hub.errors import SimulationError
-from hub.scenario import BusSettings
-from hub.slots import SlotType
+from hub.bus.session import Bus, wait_until
+from hub.core.errors import SimulationError
+from hub.bus.settings import BusSettings
+from hub.core.slots import SlotType
 
 from .bus_support import BELT_FMU, BELT_PARTICIPANT, hub, output_of, process, same_files
 from .fmus.fmu_support import build
@@ -201,8 +201,8 @@ def test_every_control_message_of_a_run_follows_the_wire_schema(tmp_path):
 
     import jsonschema
 
-    from hub import wire
-    from hub.bus import Inbox
+    from hub.bus import wire
+    from hub.bus.session import Inbox
 
     schema = json.loads((ROOT / "schemas" / "wire.schema.json").read_text())
     seen = Inbox()
@@ -228,7 +228,7 @@ def test_every_control_message_of_a_run_follows_the_wire_schema(tmp_path):
 
 
 def test_a_served_fmu_announces_the_fmu_module_slots_with_events_and_renames(fmus):
-    from hub.fmu_participant import FmuParticipant
+    from hub.logic.served import FmuParticipant
     from modules.fmu import Fmu
 
     params = Fmu.with_defaults({"file": str(FMU), "events": ["run"], "map": {"speed": "belt_speed"},
@@ -240,8 +240,8 @@ def test_a_served_fmu_announces_the_fmu_module_slots_with_events_and_renames(fmu
 
 
 def test_isolate_and_participant_exclude_each_other(fmus, write_scenario):
-    from hub.errors import ScenarioError
-    from hub.scenario import load_scenario
+    from hub.core.errors import ScenarioError
+    from hub.scenario.checker import load_scenario
 
     path = write_scenario(f"""
         planthub: 1

@@ -1,7 +1,7 @@
 """Real-time pacing with a fake clock: sleeps to each point's wall-clock time, counts late points."""
 import pytest
 
-from hub.pacing import Pacer
+from hub.run.pacing import Pacer
 
 
 class FakeClock:

@@ -10,8 +10,8 @@ import signal
 
 import pytest
 
-from hub.errors import SimulationError
-from hub.lockstep import pid_of
+from hub.core.errors import SimulationError
+from hub.bus.lockstep import pid_of
 
 from .bus_support import hub, resumed_at_exit
 from .fmus.fmu_support import build
@@ -144,8 +144,8 @@ def test_with_the_pause_policy_a_participant_that_stops_for_a_while_carries_on_b
     kept its state the recording is the in-process one."""
     import threading
 
-    from hub.bus import Bus
-    from hub.scenario import BusSettings
+    from hub.bus.session import Bus
+    from hub.bus.settings import BusSettings
 
     from .bus_support import BELT_FMU, BELT_PARTICIPANT, process, same_files
 

@@ -1,9 +1,9 @@
 """Bad parameters of the plant modules: every problem reported at once, each message naming the fix."""
 import pytest
 
-from hub.errors import ScenarioError, SimulationError
-from hub.plant import Plant
-from hub.scenario import load_scenario
+from hub.core.errors import ScenarioError, SimulationError
+from hub.run.plant import Plant
+from hub.scenario.checker import load_scenario
 
 BAD = """
 planthub: 1

@@ -2,10 +2,10 @@
 every shipped scenario runs with the resting bottles checked against the engine."""
 import pytest
 
-from hub.master import Master
-from hub.plant import Plant
-from hub.recorder import Recorder
-from hub.scenario import load_scenario
+from hub.run.master import Master
+from hub.run.plant import Plant
+from hub.run.recorder import Recorder
+from hub.scenario.checker import load_scenario
 
 from .helpers import ROOT, run_scenario
 

@@ -5,8 +5,8 @@ import json
 import pytest
 
 from hub import Simulation
-from hub.errors import ScenarioError
-from hub.scenario import load_scenario
+from hub.core.errors import ScenarioError
+from hub.scenario.checker import load_scenario
 from modules.source import Source
 
 from .helpers import ROOT, planthub_run

@@ -9,9 +9,9 @@ import csv
 
 import pytest
 
-from hub.bus import Bus, wait_until
+from hub.bus.session import Bus, wait_until
 from hub.live import Viewer
-from hub.scenario import BusSettings
+from hub.bus.settings import BusSettings
 
 from .bus_support import BELT_FMU, hub
 from .fmus.fmu_support import build
@@ -99,8 +99,8 @@ def test_a_viewer_that_asks_for_a_rate_gets_the_current_values_though_they_hold(
 
 
 def test_the_bus_section_names_how_slots_are_published(write_scenario):
-    from hub.errors import ScenarioError
-    from hub.scenario import load_scenario
+    from hub.core.errors import ScenarioError
+    from hub.scenario.checker import load_scenario
 
     scene = """
         planthub: 1

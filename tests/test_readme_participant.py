@@ -4,8 +4,8 @@ import re
 
 import yaml
 
-from hub.bus import Bus
-from hub.scenario import BusSettings
+from hub.bus.session import Bus
+from hub.bus.settings import BusSettings
 
 from .bus_support import BELT_FMU, BELT_PARTICIPANT, hub, output_of, process, same_files
 from .fmus.fmu_support import build

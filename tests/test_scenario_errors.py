@@ -1,8 +1,8 @@
 """Every class of bad scenario input gets a message naming file, line, path and cause — all at once."""
 import pytest
 
-from hub.errors import ScenarioError
-from hub.scenario import load_scenario
+from hub.core.errors import ScenarioError
+from hub.scenario.checker import load_scenario
 
 GOOD_OBJECTS = """
 objects:

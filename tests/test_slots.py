@@ -3,7 +3,7 @@ import math
 
 import pytest
 
-from hub.slots import SlotType
+from hub.core.slots import SlotType
 
 
 @pytest.mark.parametrize("kind, raw, expected", [

@@ -3,8 +3,8 @@ import csv
 
 import pytest
 
-from hub.plant import Plant
-from hub.scenario import load_scenario
+from hub.run.plant import Plant
+from hub.scenario.checker import load_scenario
 from modules.source import Source
 
 from .helpers import ROOT

@@ -6,9 +6,9 @@ import struct
 import jsonschema
 import pytest
 
-from hub import wire
-from hub.commands import command_message
-from hub.slots import SlotRef, SlotType
+from hub.bus import wire
+from hub.bus.commands import command_message
+from hub.core.slots import SlotRef, SlotType
 
 from .helpers import ROOT
 

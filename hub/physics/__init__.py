@@ -1,4 +1,4 @@
 """The material-flow physics: the only place that talks to pybullet is `world.py`."""
-from .world import PhysicsWorld
+from hub.physics.world import PhysicsWorld
 
 __all__ = ["PhysicsWorld"]

@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-from .frames import Arc, CentreLines, Pose, Straight
+from hub.physics.frames import Arc, CentreLines, Pose, Straight
 
 GRIPS = ("surface", "along")
 SPIN_AT_REST = 0.01   # rad/s: a bottle spinning slower than this about the vertical is left alone

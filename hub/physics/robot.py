@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-from ._quiet import quiet_stderr
+from hub.physics._quiet import quiet_stderr
 
 with quiet_stderr():
     import pybullet

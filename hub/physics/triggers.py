@@ -5,7 +5,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .frames import Boxes
+from hub.physics.frames import Boxes
 
 
 @dataclass

@@ -6,17 +6,17 @@ from itertools import chain
 
 import numpy as np
 
-from ._quiet import quiet_stderr
+from hub.physics._quiet import quiet_stderr
 
 with quiet_stderr():
     import pybullet
 
-from . import supports
-from .fields import ForceFields
-from .frames import Arc, Pose, Straight, base_points
-from .rest import Rest, boxes
-from .robot import KinematicArm
-from .triggers import Latch, VolumeTriggers
+from hub.physics import supports
+from hub.physics.fields import ForceFields
+from hub.physics.frames import Arc, Pose, Straight, base_points
+from hub.physics.rest import Rest, boxes
+from hub.physics.robot import KinematicArm
+from hub.physics.triggers import Latch, VolumeTriggers
 
 PARKED = (-100.0, 0.0, -100.0)   # off stage: parked bodies wait here, 0.5 m apart along y
 

@@ -5,8 +5,8 @@ import statistics
 import time
 from dataclasses import dataclass
 
-from ..physics import PhysicsWorld
-from ..physics.frames import Pose, Straight
+from hub.physics import PhysicsWorld
+from hub.physics.frames import Pose, Straight
 
 MODELS = (("simple", "centre"), ("base_point", "base"), ("base_body", "base_body"))
 SHAPES = ("cylinder", "hull")

@@ -7,9 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .runs import Run, pitch
+from hub.core.resources import SCENARIOS as SHIPPED
+from hub.reports.runs import Run, pitch
 
-SCENARIOS = Path(__file__).resolve().parent.parent.parent / "scenarios" / "paper"
+SCENARIOS = SHIPPED / "paper"
 ACCELERATION = SCENARIOS / "acceleration.yaml"
 TIPPING = SCENARIOS / "tipping_torque.yaml"
 DISTANCES = SCENARIOS / "constant_distances.yaml"

@@ -6,9 +6,9 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from . import paper
-from .plots import Line, Panel, draw
-from .runs import Run, run
+from hub.reports import paper
+from hub.reports.plots import Line, Panel, draw
+from hub.reports.runs import Run, run
 
 
 def write(out: Path, *, plots: bool = True, cost: bool = True, progress=None) -> Path:
@@ -278,7 +278,7 @@ def _spread(d: paper.Distances) -> str:
 
 # --- cost -------------------------------------------------------------------------------------
 def _cost() -> str:
-    from .cost import lod_costs
+    from hub.reports.cost import lod_costs
 
     costs = lod_costs(bottles=20, ticks=300, repeats=3)
     by = {(c.model, c.shape, c.on_belt): c.microseconds for c in costs}

@@ -9,11 +9,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..master import Master
-from ..physics.fields import ForceFields
-from ..plant import Plant
-from ..recorder import Recorder
-from ..scenario import Scenario, load_scenario
+from hub.run.master import Master
+from hub.physics.fields import ForceFields
+from hub.run.plant import Plant
+from hub.run.recorder import Recorder
+from hub.scenario.checker import Scenario, load_scenario
 
 
 @dataclass

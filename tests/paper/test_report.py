@@ -1,7 +1,7 @@
 """`python -m hub report paper` writes the numbers beside the paper's; plots only where matplotlib is."""
 import pytest
 
-from hub.cli import main
+from hub.cli.main import main
 from hub.reports.paper_report import write
 from hub.reports.plots import Line, Panel, draw
 

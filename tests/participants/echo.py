@@ -2,8 +2,8 @@
 through hub.bus, no planthub protocol, no decoding."""
 import sys
 
-from hub.bus import Bus, Inbox
-from hub.scenario import BusSettings
+from hub.bus.session import Bus, Inbox
+from hub.bus.settings import BusSettings
 
 if __name__ == "__main__":
     endpoint, i = sys.argv[1], sys.argv[2]

@@ -8,8 +8,8 @@ import uuid
 
 import msgpack
 
-from hub.bus import Bus, Inbox
-from hub.scenario import BusSettings
+from hub.bus.session import Bus, Inbox
+from hub.bus.settings import BusSettings
 
 
 def main() -> int:

@@ -1,0 +1,202 @@
+"""Operator commands: set, force or release a slot, or stop the run — applied at a communication
+point, recorded with its tick in `commands.csv`, and replayed from there bit for bit.
+
+- `set SLOT VALUE`: once, at the next point. A source takes the value after the components
+  sensed (flows pass it on); a target after the flows were evaluated (it wins over them), as if
+  a flow had fed it.
+- `force SLOT VALUE`: the same at every point until `release SLOT`.
+- `stop`: the run ends after this point.
+
+A target read by its own component within the step (a constant's or connector's input) cannot
+be commanded: command the slot that feeds it.
+"""
+from __future__ import annotations
+
+import csv
+import json
+from collections import deque
+from dataclasses import dataclass
+from pathlib import Path
+
+from hub.bus.session import Bus, Inbox
+from hub.core.errors import PlanthubError
+from hub.core.registry import did_you_mean
+from hub.core.slots import Direction, SlotType
+from hub.bus import wire
+
+OPS = ("set", "force", "release", "stop")
+
+
+class CommandError(PlanthubError):
+    """A command cannot be applied (unknown slot, wrong value) or a command file cannot be read."""
+
+
+@dataclass(frozen=True)
+class Command:
+    op: str
+    slot: str = ""          # object.component.slot; empty for stop
+    value: object = None    # the canonical slot value; None for void, release, stop
+    by: str = ""            # who sent it, as it asked to be logged
+
+    def value_text(self, kind: SlotType | None) -> str:
+        """The value as JSON (empty where there is none), exact for every double."""
+        if self.op in ("release", "stop") or kind in (None, SlotType.VOID):
+            return ""
+        return json.dumps(wire.to_wire(kind, self.value))
+
+    def describe(self, kind: SlotType | None) -> str:
+        text = " ".join(p for p in (self.op, self.value_text(kind)) if p)
+        return text + (f" by {self.by}" if self.by else "")
+
+
+class Commands:
+    """The commands of one run: from the bus (`listen`) or from a recording (`replay`), never both."""
+
+    def __init__(self, plant, recorder, replay: list[tuple[int, Command]] | None = None):
+        self.recorder = recorder
+        self.slots = {}    # "obj.comp.slot" → (index, Slot)
+        feedthrough = {(c.obj, c.name, t) for c in plant.components for t, _ in c.FEEDTHROUGH}
+        self._inner = set()
+        for ref, index in plant.index.items():
+            self.slots[str(ref)] = (index, plant.signals.slots[index])
+            if (ref.obj, ref.component, ref.slot) in feedthrough:
+                self._inner.add(str(ref))
+        self._replay = deque(replay) if replay is not None else None
+        self._inbox = Inbox()
+        self._results = None
+        self._forced: dict[int, object] = {}
+        self._once: list[tuple[int, object]] = []
+        self.stop_requested = False
+
+    # --- sources of commands -------------------------------------------------------------
+    def listen(self, bus: Bus, run: str) -> None:
+        """Take live commands from `plant/<run>/@cosim/command`; answer on `…/command/result`."""
+        bus.subscribe(wire.control_key(run, "command"), lambda m: self._inbox.put(m.payload))
+        self._results = bus.publisher(wire.control_key(run, "command", "result"), wire.MSGPACK)
+
+    def parse(self, message) -> Command:
+        """A command message (a map: op, slot, value, by) → a checked Command, or CommandError."""
+        if not isinstance(message, dict) or message.get("op") not in OPS:
+            raise CommandError(f"expected a map with op one of {', '.join(OPS)}, got {message!r}")
+        op, by = message["op"], message.get("by", "")
+        if not isinstance(by, str):
+            raise CommandError(f"`by` must be a string, got {by!r}")
+        if op == "stop":
+            return Command("stop", by=by)
+        name = message.get("slot")
+        if not isinstance(name, str) or name not in self.slots:
+            shown = name if isinstance(name, str) else repr(name)
+            raise CommandError(f"no slot {shown!r}{did_you_mean(str(name), self.slots)}")
+        if name in self._inner:
+            raise CommandError(f"{name} is read by its own component within the step; command the slot "
+                               f"that feeds it instead")
+        kind = self.slots[name][1].type
+        if op == "release":
+            return Command("release", name, by=by)
+        if kind is SlotType.VOID:
+            value = None
+        else:
+            try:
+                value = kind.coerce(message.get("value"))
+            except ValueError as exc:
+                raise CommandError(f"{name} is {kind.value}: {exc}") from None
+        return Command(op, name, value, by)
+
+    def pending(self) -> bool:
+        """Whether live commands wait for the next point."""
+        return not self._inbox.empty()
+
+    # --- at a communication point ----------------------------------------------------------
+    def take(self, tick: int) -> list[tuple[int, str, str]]:
+        """Apply the commands due at this point: record them and return their event-log rows."""
+        due = []
+        if self._replay is not None:
+            while self._replay and self._replay[0][0] <= tick:
+                at, command = self._replay.popleft()
+                if at < tick:
+                    raise CommandError(f"the replayed command at tick {at} ({command.describe(None)} "
+                                       f"{command.slot}) falls between two communication points of this run")
+                due.append(command)
+        elif not self._inbox.empty():
+            for payload in self._inbox.drain():
+                try:
+                    command = self.parse(wire.unpack(payload))
+                except (CommandError, wire.WireError) as exc:
+                    self._answer(payload, tick, str(exc))
+                    continue
+                due.append(command)
+                self._answer(payload, tick, None)
+        rows = []
+        for command in due:
+            kind = self.slots[command.slot][1].type if command.slot else None
+            if command.op == "stop":
+                self.stop_requested = True
+            else:
+                index = self.slots[command.slot][0]
+                if command.op == "set":
+                    self._once.append((index, command.value))
+                elif command.op == "force":
+                    self._forced[index] = command.value
+                else:
+                    self._forced.pop(index, None)
+            self.recorder.command(tick, command.op, command.slot, command.value_text(kind), command.by)
+            rows.append((tick, command.slot or "@run", command.describe(kind)))
+        return rows
+
+    def _answer(self, payload: bytes, tick: int, error: str | None) -> None:
+        if self._results is None:
+            return
+        try:
+            ident = wire.unpack(payload).get("id", "")
+        except (wire.WireError, AttributeError):
+            ident = ""
+        self._results.put(wire.pack({"id": ident, "ok": error is None, "tick": tick, "error": error or ""}))
+
+    def apply(self, signals, direction: Direction) -> None:
+        """Write the commanded values of this direction's slots (sources after sensing, targets after flows)."""
+        if not (self._once or self._forced):
+            return
+        for index, value in [*self._forced.items(), *self._once]:
+            slot = signals.slots[index]
+            if slot.direction is not direction:
+                continue
+            if direction is Direction.SOURCE:
+                signals.emit(index, value)
+            else:
+                if value is not None:
+                    signals.values[index] = value
+                signals.updated[index] = True
+        if direction is Direction.TARGET:
+            self._once.clear()
+
+
+def load_commands(run_dir: Path, plant) -> list[tuple[int, Command]]:
+    """The commands a run recorded (`RUN_DIR/commands.csv`; none if it has no such file)."""
+    run_dir = Path(run_dir)
+    if not (run_dir / "recording.csv").is_file() and not (run_dir / "events.csv").is_file():
+        raise CommandError(f"{run_dir}: not a run folder (no recording.csv or events.csv)")
+    path = run_dir / "commands.csv"
+    if not path.is_file():
+        return []
+    checker = Commands(plant, recorder=None)
+    out = []
+    with open(path, newline="", encoding="utf-8") as handle:
+        for line, row in enumerate(csv.DictReader(handle), start=2):
+            try:
+                message = {"op": row["op"], "slot": row["slot"], "by": row.get("by") or ""}
+                if row["value"]:
+                    message["value"] = json.loads(row["value"])
+                out.append((int(row["tick"]), checker.parse(message)))
+            except (CommandError, ValueError, KeyError, TypeError) as exc:
+                raise CommandError(f"{path}:{line}: {exc}") from None
+    return out
+
+
+def command_message(op: str, slot: str = "", value=None, by: str = "", ident: str = "") -> bytes:
+    """A command as it goes on the bus (what `planthub send` and `hub.live.Viewer.command` put)."""
+    message = {"op": op, "id": ident, "by": by}
+    if slot:
+        message["slot"] = slot
+    if value is not None:
+        message["value"] = list(value) if isinstance(value, tuple) else value
+    return wire.pack(message)

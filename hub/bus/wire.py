@@ -1,0 +1,197 @@
+"""The wire format of the bus (schemas/wire.md): key expressions, slot value codecs, control messages."""
+from __future__ import annotations
+
+import re
+import struct
+
+import msgpack
+
+from hub.core.errors import PlanthubError
+from hub.core.slots import SlotRef, SlotType
+
+PROTOCOL = 1
+MSGPACK = "application/msgpack"          # Zenoh encoding of every control message
+AGENT = "planthub-python/0.1"
+
+
+class WireError(PlanthubError):
+    """A message on the bus does not follow the wire format; the message says which part."""
+
+
+# --- key expressions ---------------------------------------------------------------------
+_CHUNK = re.compile(r"^[^/*$?#@]+$")
+
+
+def check_run_name(run: str) -> str:
+    """A run name is one key chunk: no `/`, `*`, `$`, `?`, `#` or `@`."""
+    if not isinstance(run, str) or not _CHUNK.match(run):
+        raise WireError(f"run name {run!r} cannot be a Zenoh key chunk (no / * $ ? # @, not empty)")
+    return run
+
+
+def data_key(run: str, ref: SlotRef) -> str:
+    """Data plane: `plant/<run>/<object>/<component>/<slot>`."""
+    return f"plant/{run}/{ref.obj}/{ref.component}/{ref.slot}"
+
+
+def control_key(run: str, *parts: str) -> str:
+    """Control plane, under the verbatim chunk `@cosim` (so `plant/**` never matches it)."""
+    return "/".join(("plant", run, "@cosim") + parts)
+
+
+def hub_token(run: str) -> str:
+    return control_key(run, "hub")
+
+
+def logic_key(run: str, name: str, *parts: str) -> str:
+    """Keys of one lockstep participant: its liveliness token, hello, welcome, step, output."""
+    return control_key(run, "logic", name, *parts)
+
+
+# --- data plane: one slot value, raw little-endian ------------------------------------------
+_STRUCTS = {
+    SlotType.BOOL: struct.Struct("<?"),
+    SlotType.INT: struct.Struct("<q"),
+    SlotType.REAL: struct.Struct("<d"),
+    SlotType.VEC3: struct.Struct("<3d"),
+    SlotType.QUAT: struct.Struct("<4d"),
+}
+TICK = struct.Struct("<Q")   # the attachment of a data-plane sample: the tick of its communication point
+
+
+def value_encoding(kind: SlotType) -> str:
+    """Zenoh encoding of a data-plane sample of this slot type."""
+    return f"zenoh/bytes;planthub/{kind.value}"
+
+
+def value_packer(kind: SlotType):
+    """A function value → bytes for this slot type (void: empty, string: UTF-8, others: struct)."""
+    if kind is SlotType.VOID:
+        return lambda value: b""
+    if kind is SlotType.STRING:
+        return lambda value: value.encode("utf-8")
+    s = _STRUCTS[kind]
+    return (lambda value: s.pack(*value)) if kind in (SlotType.VEC3, SlotType.QUAT) else s.pack
+
+
+def unpack_value(kind: SlotType, data: bytes):
+    """The canonical Python value of a data-plane payload (None for void)."""
+    if kind is SlotType.VOID:
+        return None
+    if kind is SlotType.STRING:
+        return data.decode("utf-8")
+    values = _STRUCTS[kind].unpack(data)
+    return values if kind in (SlotType.VEC3, SlotType.QUAT) else values[0]
+
+
+# --- control plane: msgpack ------------------------------------------------------------
+def pack(message) -> bytes:
+    return msgpack.packb(message, use_bin_type=True)
+
+
+def unpack(data: bytes):
+    try:
+        return msgpack.unpackb(data, raw=False, strict_map_key=False)
+    except Exception as exc:   # msgpack raises several types for bad input
+        raise WireError(f"not a msgpack message ({exc})") from None
+
+
+def to_wire(kind: SlotType, value):
+    """A slot value as it travels in step and output messages (void: whether it fired)."""
+    if kind in (SlotType.VEC3, SlotType.QUAT):
+        return list(value)
+    return value
+
+
+def reader(kind: SlotType):
+    """A fast function wire value → canonical slot value for this type; it raises WireError (without
+    context: the caller names the slot) for a value that does not fit."""
+    def check(value):
+        return from_wire(kind, value, "value")
+    if kind in (SlotType.VOID, SlotType.BOOL):
+        return lambda value: value if value is True or value is False else check(value)
+    if kind is SlotType.REAL:
+        return lambda value: value if type(value) is float else check(value)
+    if kind is SlotType.INT:
+        return lambda value: value if type(value) is int else check(value)
+    if kind is SlotType.STRING:
+        return lambda value: value if type(value) is str else check(value)
+    return check
+
+
+_PYTHON_TYPES = {SlotType.VOID: bool, SlotType.BOOL: bool, SlotType.INT: int, SlotType.REAL: float,
+                 SlotType.STRING: str}
+
+
+def python_types(kinds) -> tuple | None:
+    """The Python types msgpack gives for values of these slot types that need no conversion
+    (`reader` returns them as they are), or None if one of them always does (vec3, quat)."""
+    types = tuple(_PYTHON_TYPES.get(kind) for kind in kinds)
+    return None if None in types else types
+
+
+def from_wire(kind: SlotType, value, what: str):
+    """The canonical slot value of a value received in a message; WireError names `what` if it does not fit."""
+    if kind in (SlotType.VOID, SlotType.BOOL):
+        if isinstance(value, bool):
+            return value
+    elif kind is SlotType.INT:
+        if isinstance(value, int) and not isinstance(value, bool):
+            return value
+    elif kind is SlotType.REAL:
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return float(value)   # exact for a float64; an integer is taken as its double
+    elif kind is SlotType.STRING:
+        if isinstance(value, str):
+            return value
+    else:
+        n = 3 if kind is SlotType.VEC3 else 4
+        if isinstance(value, (list, tuple)) and len(value) == n and all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) for x in value):
+            return tuple(float(x) for x in value)
+    expected = "true or false" if kind is SlotType.VOID else f"a {kind.value}"
+    raise WireError(f"{what}: expected {expected}, got {value!r}")
+
+
+def interface(pairs) -> list[list[str]]:
+    """[(slot name, SlotType)] → the `inputs`/`outputs` list of a hello message."""
+    return [[name, kind.value] for name, kind in pairs]
+
+
+def read_interface(entries, what: str) -> list[tuple[str, SlotType]]:
+    if not isinstance(entries, list):
+        raise WireError(f"{what}: expected a list of [name, type] pairs, got {entries!r}")
+    out = []
+    for entry in entries:
+        if not (isinstance(entry, list) and len(entry) == 2 and isinstance(entry[0], str)
+                and entry[1] in {t.value for t in SlotType}):
+            raise WireError(f"{what}: expected [name, type] with type one of "
+                            f"{', '.join(t.value for t in SlotType)}, got {entry!r}")
+        out.append((entry[0], SlotType(entry[1])))
+    return out
+
+
+_hot = msgpack.Packer()   # step and output messages: packed on one thread (the hub's or a participant's main)
+
+
+def step_message(n: int, tick: int, ticks: int, t: float, h: float, inputs: list) -> bytes:
+    """Hub → participant: step `n` over [t, t + h] = ticks [tick, tick + ticks], with its inputs
+    (a tuple packs as an array, so vec3 and quat values need no conversion)."""
+    return _hot.pack([n, tick, ticks, t, h, inputs])
+
+
+def read_step(data: bytes):
+    message = unpack(data)
+    if not (isinstance(message, list) and len(message) == 6 and isinstance(message[5], list)):
+        raise WireError(f"step message: expected [n, tick, ticks, t, h, inputs], got {message!r}")
+    return message
+
+
+def output_message(n: int, outputs: list) -> bytes:
+    """Participant → hub: the outputs after step `n` (n = -1: the initial outputs, before any step)."""
+    return _hot.pack([n, outputs])
+
+
+def error_message(n: int, error: str) -> bytes:
+    """Participant → hub, instead of outputs: step `n` failed."""
+    return pack({"step": n, "error": error})

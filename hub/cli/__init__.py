@@ -1,0 +1,4 @@
+"""The command line (`planthub`, `python -m hub`)."""
+from hub.cli.main import main
+
+__all__ = ["main"]

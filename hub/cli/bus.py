@@ -1,0 +1,123 @@
+"""The command line's bus side: run options (bus, pacing, replay), `serve-fmu` and `send`."""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import uuid
+from dataclasses import replace
+from pathlib import Path
+
+from hub.core.errors import PlanthubError
+from hub.bus.settings import BusSettings
+from hub.scenario.checker import Scenario
+
+
+def add_run_options(run: argparse.ArgumentParser) -> None:
+    run.add_argument("--realtime", nargs="?", type=float, const=1.0, metavar="FACTOR",
+                     help="pace the run to the wall clock (FACTOR× real time, default 1) and report overruns")
+    run.add_argument("--replay", type=Path, metavar="RUN_DIR",
+                     help="apply the operator commands recorded in RUN_DIR/commands.csv at their ticks")
+    bus = run.add_argument_group("bus (any of these opens it; they override the scenario's run.bus)")
+    bus.add_argument("--bus", action="store_true", help="open the bus even if the scenario has no run.bus")
+    bus.add_argument("--listen", action="append", metavar="ENDPOINT", help="listen on, e.g. tcp/0.0.0.0:7447")
+    bus.add_argument("--connect", action="append", metavar="ENDPOINT", help="connect to, e.g. tcp/10.0.0.2:7447")
+    bus.add_argument("--mode", choices=["peer", "client", "router"], help="the hub's Zenoh mode")
+
+
+def add_commands(sub) -> dict:
+    """The bus subcommands; returns name → handler."""
+    from hub.bus.participant import add_options, add_tls_options
+
+    serve = sub.add_parser("serve-fmu", help="serve an FMU to a running plant over the bus (a lockstep participant)")
+    serve.add_argument("fmu", type=Path)
+    serve.add_argument("--event", action="append", default=[], metavar="VARIABLE",
+                       help="a Boolean variable that is a void slot (the object's `events`)")
+    serve.add_argument("--map", action="append", default=[], metavar="VARIABLE=SLOT",
+                       help="a variable's slot name (the object's `map`)")
+    add_options(serve)
+
+    send = sub.add_parser("send", help="send an operator command to a running plant")
+    send.add_argument("run", help="the run's name")
+    send.add_argument("op", choices=["set", "force", "release", "stop"])
+    send.add_argument("slot", nargs="?", default="", help="object.component.slot")
+    send.add_argument("value", nargs="?", help="the value, read as YAML (0.2, true, [0, 0, 1])")
+    send.add_argument("--connect", action="append", required=True, metavar="ENDPOINT", help="the hub's endpoint")
+    send.add_argument("--by", default="", help="who sends it (logged with the command)")
+    send.add_argument("--timeout", type=float, default=5.0, help="s to wait for the hub's answer")
+    add_tls_options(send)
+    return {"serve-fmu": lambda args: _serve_fmu(serve, args), "send": lambda args: _send(send, args)}
+
+
+def bus_settings(args, scenario: Scenario) -> BusSettings | None:
+    """The hub's bus settings: the scenario's `run.bus` with the command line's overrides, or None."""
+    settings = scenario.run.bus
+    flags = args.bus or args.listen or args.connect or args.mode
+    if settings is None and not flags:
+        return None
+    settings = settings or BusSettings()
+    if args.listen:
+        settings = replace(settings, listen=tuple(args.listen))
+    if args.connect:
+        settings = replace(settings, connect=tuple(args.connect))
+    if args.mode:
+        settings = replace(settings, mode=args.mode)
+    return settings
+
+
+def _serve_fmu(parser, args) -> int:
+    from hub.logic.fmi import FmuError
+    from hub.logic.served import FmuParticipant
+    from hub.bus.participant import check_options, serve
+
+    check_options(parser, args)
+    rename = {}
+    for item in args.map:
+        variable, sep, slot = item.partition("=")
+        if not sep:
+            parser.error(f"--map expects VARIABLE=SLOT, got {item!r}")
+        rename[variable] = slot
+    try:
+        logic = FmuParticipant(str(args.fmu), args.event, rename, instance=args.name)
+    except FmuError as exc:
+        print(f"planthub: {exc}", file=sys.stderr)
+        return 1
+    return serve(logic, args=args)
+
+
+def _send(parser, args) -> int:
+    import yaml
+
+    from hub.bus.session import Bus, Inbox
+    from hub.bus.commands import command_message
+    from hub.bus.participant import tls_settings
+    from hub.bus import wire
+
+    tls = tls_settings(parser, args)
+    value = yaml.safe_load(args.value) if args.value is not None else None
+    ident = uuid.uuid4().hex
+    inbox = Inbox()
+    with Bus(BusSettings(connect=tuple(args.connect), tls=tls), listen=False) as bus:
+        bus.watch_tokens(wire.hub_token(args.run), lambda m: inbox.put(("hub", m.alive)))
+        bus.subscribe(wire.control_key(args.run, "command", "result"), lambda m: inbox.put(("result", m.payload)))
+        deadline = time.monotonic() + args.timeout
+        sent = False
+        while time.monotonic() < deadline:
+            item = inbox.get(deadline - time.monotonic())
+            if item is None:
+                break
+            kind, payload = item
+            if kind == "hub" and payload and not sent:
+                bus.put(wire.control_key(args.run, "command"),
+                        command_message(args.op, args.slot, value, args.by, ident), wire.MSGPACK)
+                sent = True
+            elif kind == "result":
+                result = wire.unpack(payload)
+                if result.get("id") != ident:
+                    continue
+                if not result.get("ok"):
+                    raise PlanthubError(f"the hub refused the command: {result.get('error')}")
+                print(f"{args.op} {args.slot} applied at tick {result['tick']}".replace("  ", " "))
+                return 0
+    what = "no answer from its hub" if sent else "no hub seen"
+    raise PlanthubError(f"run {args.run!r}: {what} within {args.timeout:g} s ({', '.join(args.connect)})")

@@ -1,0 +1,76 @@
+"""The component contract: a small piece of functionality that owns typed slots."""
+from __future__ import annotations
+
+from typing import ClassVar, Iterator
+
+from hub.core.signals import Signals
+from hub.core.slots import Direction, Slot, SlotType
+
+
+class Component:
+    """Base of every component. Subclasses declare `SLOTS` and override the step hooks they need.
+
+    Step hooks, called by the master in this order each communication step:
+    `sense(tick)` writes sources from the world; `react()` (only for components that declare
+    `FEEDTHROUGH`) computes sources from targets while flows are evaluated; `actuate()` reads
+    targets and applies them to the world; `step(tick, ticks)` advances a logic component
+    (an FMU) over the communication step that starts at `tick` and lasts `ticks`.
+    """
+
+    SLOTS: ClassVar[tuple[Slot, ...]] = ()
+    #: (target, source) pairs where the target's value reaches the source within the same step.
+    FEEDTHROUGH: ClassVar[tuple[tuple[str, str], ...]] = ()
+
+    def __init__(self, obj: str, name: str):
+        self.obj = obj
+        self.name = name
+        self.signals: Signals | None = None
+        self.index: dict[str, int] = {}
+        self.needed: frozenset[str] = frozenset()
+
+    def bind(self, signals: Signals, index: dict[str, int], needed: frozenset[str]) -> None:
+        """Attach the plant's state object, this component's slot numbers (slot name → index) and
+        the names of its sources that something reads (a flow, the recording): a component may
+        skip computing the others, so a scene pays only for what it uses."""
+        self.signals = signals
+        self.index = index
+        self.needed = needed
+
+    def sense(self, tick: int) -> None:
+        """Write this step's source values (step 1 of the loop)."""
+
+    def react(self) -> None:
+        """Compute feedthrough sources from targets already written in this step."""
+
+    def actuate(self) -> None:
+        """Apply this step's target values to the world (step 4 of the loop)."""
+
+    def step(self, tick: int, ticks: int) -> None:
+        """Advance own logic over [tick, tick + ticks] with the inputs of this point; its new
+        outputs are for the points that follow (sensed there, never earlier)."""
+
+    def emit_ready(self, tick: int) -> bool:
+        """Write now the outputs the last `step` computed for `tick` (Gauss-Seidel hands them on
+        before the next point); False if the component cannot."""
+        return False
+
+    def close(self) -> None:
+        """Release what the component holds (FMU instances, processes)."""
+
+    def events(self, tick: int) -> Iterator[tuple[int, str, str]]:
+        """Event-log rows `(tick, slot, detail)` for this step: by default every active void source."""
+        signals = self.signals
+        for slot in self.SLOTS:
+            if slot.type is SlotType.VOID and slot.direction is Direction.SOURCE:
+                if signals.active[self.index[slot.name]]:
+                    yield tick, slot.name, ""
+
+    # Helpers for subclasses: read a target / write a source by slot name.
+    def updated(self, slot: str) -> bool:
+        return self.signals.updated[self.index[slot]]
+
+    def value(self, slot: str):
+        return self.signals.values[self.index[slot]]
+
+    def emit(self, slot: str, value=None) -> None:
+        self.signals.emit(self.index[slot], value)

@@ -1,0 +1,64 @@
+"""The module contract: a plant element type that a scenario instantiates as a dynamic object."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+from hub.core.component import Component
+from hub.core.logic_spec import LogicSpec
+from hub.core.slots import Slot
+
+
+@dataclass
+class DynamicObject:
+    """One plant element instance (`belt3`, `bottle17`): a named container of components."""
+
+    name: str
+    module: str
+    components: dict[str, Component]
+
+
+class Module:
+    """Base of element modules. A subclass declares:
+
+    - `PARAMETERS`: a JSON Schema (an object schema) of its scenario parameters, with defaults;
+    - `COMPONENTS`: component name → component class, whose `SLOTS` make the module's slot table;
+    - `build(name, params, world)`: the components of one instance, with its physics created;
+    - optionally `LOGIC`: its default state logic FMU and how it is wired to its components.
+    """
+
+    PARAMETERS: ClassVar[dict] = {"type": "object", "properties": {}}
+    COMPONENTS: ClassVar[dict[str, type[Component]]] = {}
+    #: The actuator's state logic (an FMU) that a scenario attaches with `logic:`; None: it has none.
+    LOGIC: ClassVar[LogicSpec | None] = None
+
+    @classmethod
+    def slots(cls, params: dict) -> dict[str, tuple[Slot, ...]]:
+        """Component name → its slots, for checking a scenario without building anything."""
+        return {name: comp.SLOTS for name, comp in cls.COMPONENTS.items()}
+
+    @classmethod
+    def feedthrough(cls, params: dict) -> dict[str, tuple[tuple[str, str], ...]]:
+        """Component name → its (target, source) pairs that pass within one step."""
+        return {name: comp.FEEDTHROUGH for name, comp in cls.COMPONENTS.items() if comp.FEEDTHROUGH}
+
+    @classmethod
+    def check(cls, params: dict) -> list[tuple[tuple, str]]:
+        """Problems the parameter schema cannot express, as (path within params, message)."""
+        return []
+
+    @classmethod
+    def check_run(cls, params: dict, run) -> list[tuple[tuple, str]]:
+        """Problems of these parameters under the scenario's run settings (`RunSettings`)."""
+        return []
+
+    @classmethod
+    def with_defaults(cls, params: dict) -> dict:
+        """The parameters with every default from `PARAMETERS` filled in."""
+        out = {k: v["default"] for k, v in cls.PARAMETERS.get("properties", {}).items() if "default" in v}
+        out.update(params)
+        return out
+
+    @classmethod
+    def build(cls, name: str, params: dict, world) -> dict[str, Component]:
+        raise NotImplementedError

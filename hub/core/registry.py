@@ -1,0 +1,56 @@
+"""The module registry: module names → lazily imported classes, with "did you mean" on a miss."""
+from __future__ import annotations
+
+import difflib
+import importlib
+
+from hub.core.module import Module
+
+
+class UnknownModule(LookupError):
+    """No module of that name; the message carries the nearest names."""
+
+
+class Registry:
+    """Maps module names to entry points `"package.file:Class"`, imported on first use."""
+
+    def __init__(self, entries: dict[str, str]):
+        self._entries = dict(entries)
+        self._loaded: dict[str, type[Module]] = {}
+
+    def names(self) -> list[str]:
+        return sorted(self._entries)
+
+    def __contains__(self, name: str) -> bool:
+        return name in self._entries
+
+    def register(self, name: str, entry_point: str) -> None:
+        if name in self._entries:
+            raise ValueError(f"module {name!r} is already registered as {self._entries[name]}")
+        self._entries[name] = entry_point
+
+    def get(self, name: str) -> type[Module]:
+        if name not in self._entries:
+            raise UnknownModule(f"unknown module {name!r}{did_you_mean(name, self._entries)}")
+        if name not in self._loaded:
+            path, _, attr = self._entries[name].partition(":")
+            self._loaded[name] = getattr(importlib.import_module(path), attr)
+        return self._loaded[name]
+
+
+def did_you_mean(name: str, choices) -> str:
+    """` (did you mean 'x'?)` for the closest choice, or a list of what exists when few do."""
+    choices = sorted(choices)
+    close = difflib.get_close_matches(name, choices, n=1, cutoff=0.6)
+    if close:
+        return f" (did you mean {close[0]!r}?)"
+    if 0 < len(choices) <= 8:
+        return " (known: " + ", ".join(choices) + ")"
+    return ""
+
+
+def default_registry() -> Registry:
+    """The element modules that ship with planthub (listed in `modules/__init__.py`)."""
+    from modules import CATALOGUE
+
+    return Registry(CATALOGUE)

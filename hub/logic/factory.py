@@ -1,0 +1,66 @@
+"""The one place that picks a logic transport: an object's logic runs in the hub, in a child process or over the bus, as its scenario says."""
+from __future__ import annotations
+
+import contextlib
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+from hub.bus.lockstep import RemoteSpec
+from hub.core.errors import SimulationError
+from hub.core.slave import LogicSlave
+from hub.logic.fmi import FmuInterface, FmuSlave
+from hub.logic.inprocess import InProcessSlave, make_logic
+from hub.logic.isolated import IsolatedFmu
+from hub.logic.remote import RemoteSlave
+
+#: Where logic runs: `hub` — in the hub's process; `child` — in a child process over a pipe;
+#: `bus` — in a participant process over the Zenoh bus (launched by the hub or joining).
+TRANSPORTS = ("hub", "child", "bus")
+
+
+@dataclass(frozen=True)
+class SlavePlan:
+    """What one logic object runs and where: an FMU (`fmu`, its input and output variables in
+    slot order) or a Python participant module (`python`: module and arguments), and the
+    interface the scenario expects of it (`remote`: name, typed inputs and outputs, parameters,
+    the command that launches it, its folder and join time-out)."""
+
+    transport: str
+    remote: RemoteSpec
+    fmu: FmuInterface | None = None
+    variables: tuple[tuple[str, ...], tuple[str, ...]] = ((), ())
+    python: tuple[str, ...] | None = None
+
+
+def make_slave(plan: SlavePlan, rate: int) -> LogicSlave:
+    """The slave for `plan` at the scenario's physics `rate` (ticks per second)."""
+    if plan.transport not in TRANSPORTS:
+        raise SimulationError(f"{plan.remote.label}: unknown transport {plan.transport!r} (known: {', '.join(TRANSPORTS)})")
+    spec = plan.remote
+    if plan.transport == "bus":
+        return RemoteSlave(spec, rate)
+    if plan.fmu is not None:
+        runner = IsolatedFmu if plan.transport == "child" else FmuSlave
+        inputs, outputs = plan.variables
+        return runner(plan.fmu, spec.name, list(inputs), list(outputs), dict(spec.parameters))
+    if plan.python is not None and plan.transport == "hub":
+        module, *argv = plan.python
+        with _importable(spec.cwd or "."):
+            logic = make_logic(module, argv, f"{spec.label} (in-process)")
+        return InProcessSlave(spec, logic)
+    raise SimulationError(f"{spec.label}: a Python participant runs in the hub or over the bus, not {plan.transport!r}")
+
+
+@contextlib.contextmanager
+def _importable(folder: str):
+    """Modules in `folder` (where a launched participant would run) import, as they would there."""
+    folder = str(Path(folder).resolve())
+    added = folder not in sys.path
+    if added:
+        sys.path.insert(0, folder)
+    try:
+        yield
+    finally:
+        if added:
+            sys.path.remove(folder)

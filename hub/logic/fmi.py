@@ -1,0 +1,338 @@
+"""The FMU adapter: every FMI call planthub makes goes through this file (FMUs loaded with fmpy)."""
+from __future__ import annotations
+
+import ctypes
+import itertools
+import shutil
+import tempfile
+import zipfile
+from collections import deque
+from dataclasses import dataclass
+from pathlib import Path
+from xml.etree import ElementTree
+
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+from fmpy.fmi2 import fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
+from fmpy.fmi3 import FMU3Slave
+
+from hub.core.errors import PlanthubError, SimulationError
+from hub.core.slots import SlotType
+
+# FMI type names (2.0 and 3.0) → slot types. Anything else stays unmapped.
+_TYPES = {
+    "Real": SlotType.REAL, "Float64": SlotType.REAL,
+    "Integer": SlotType.INT, "Int32": SlotType.INT, "Enumeration": SlotType.INT,
+    "Boolean": SlotType.BOOL,
+    "String": SlotType.STRING,
+}
+# Where each FMI version keeps this platform's binary.
+_PLATFORM = {"2.0": "linux64", "3.0": "x86_64-linux"}
+_STATUS = ["ok", "warning", "discard", "error", "fatal", "pending"]
+_LOG_LINES = 20
+
+
+class FmuError(PlanthubError):
+    """An FMU file cannot be used: the message names the file and the cause."""
+
+
+@dataclass(frozen=True)
+class FmuVariable:
+    name: str
+    type: SlotType
+    causality: str          # input, output, parameter, …
+    vr: int
+    fmi_type: str
+    start: object = None
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class FmuInterface:
+    """What a scenario check needs of an FMU: its version, identity and mappable variables."""
+
+    path: Path
+    fmi_version: str
+    model_name: str
+    identifier: str
+    guid: str
+    variables: dict[str, FmuVariable]
+    variable_steps: bool       # canHandleVariableCommunicationStepSize
+
+    def of(self, causality: str) -> list[FmuVariable]:
+        return [v for v in self.variables.values() if v.causality == causality]
+
+
+def inspect_fmu(path: Path) -> FmuInterface:
+    """Read an FMU's interface without loading its binary; FmuError says why it cannot be used."""
+    path = Path(path)
+    if not path.is_file():
+        raise FmuError(f"{path}: no such FMU file")
+    if not zipfile.is_zipfile(path):
+        raise FmuError(f"{path}: not an FMU (an FMU is a zip archive)")
+    with zipfile.ZipFile(path) as archive:
+        names = set(archive.namelist())
+        if "modelDescription.xml" not in names:
+            raise FmuError(f"{path}: no modelDescription.xml in the archive")
+        try:
+            # The version decides which schema applies, so read it before fmpy validates.
+            version = ElementTree.fromstring(archive.read("modelDescription.xml")).get("fmiVersion", "")
+        except ElementTree.ParseError as exc:
+            raise FmuError(f"{path}: modelDescription.xml is not XML: {exc}") from None
+    if version not in _PLATFORM:
+        raise FmuError(f"{path}: FMI {version or '(no fmiVersion)'} is not supported "
+                       f"(planthub loads FMI 2.0 and 3.0 co-simulation FMUs)")
+    try:
+        md = read_model_description(str(path))
+    except Exception as exc:  # fmpy reports schema and XML problems with several exception types
+        raise FmuError(f"{path}: modelDescription.xml is not valid: {exc}") from None
+    if md.coSimulation is None:
+        raise FmuError(f"{path}: model exchange only; planthub needs a co-simulation FMU")
+    identifier = md.coSimulation.modelIdentifier
+    binary = f"binaries/{_PLATFORM[version]}/{identifier}.so"
+    if binary not in names:
+        found = sorted({n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") >= 2})
+        raise FmuError(f"{path}: no binary for this platform ({binary}); the FMU has: {', '.join(found) or 'none'}")
+    variables = {}
+    for v in md.modelVariables:
+        kind = _TYPES.get(v.type)
+        if kind is None or v.shape:
+            continue   # arrays, clocks and other types are not mapped to slots
+        variables[v.name] = FmuVariable(v.name, kind, v.causality, v.valueReference, v.type,
+                                        v.start, v.description or "")
+    variable_steps = bool(md.coSimulation.canHandleVariableCommunicationStepSize)
+    return FmuInterface(path, version, md.modelName, identifier, md.guid, variables, variable_steps)
+
+
+def validate(path: Path) -> list[str]:
+    """fmpy's own checks of an FMU (model description, structure, names): a list of problems."""
+    from fmpy.validation import validate_fmu
+
+    return [str(p).strip() for p in validate_fmu(str(path))]
+
+
+def compare(fmu: FmuInterface, reference: FmuInterface) -> list[str]:
+    """What `fmu` lacks to stand in for `reference`: inputs and outputs by name and slot type."""
+    problems = []
+    for causality in ("input", "output"):
+        for want in reference.of(causality):
+            have = fmu.variables.get(want.name)
+            if have is None or have.causality != causality:
+                problems.append(f"missing {causality} {want.name!r} ({want.type.value})")
+            elif have.type is not want.type:
+                problems.append(f"{causality} {want.name!r} is {have.type.value} here but {want.type.value} "
+                                f"in {reference.path.name}")
+    for name in sorted(n for n, v in reference.variables.items() if v.causality == "parameter"):
+        if name not in fmu.variables:
+            problems.append(f"no parameter {name!r} (a scenario setting it would be rejected)")
+    return problems
+
+
+class FmuSlave:
+    """One running co-simulation instance in the hub's process: a logic slave (hub.core.slave).
+
+    Inputs and outputs are set and read through pre-allocated ctypes arrays grouped by type,
+    one FMI call per type and direction per step. Every call goes through `_call`, which turns
+    a failing status into a SimulationError naming the instance, the function, the time and
+    the FMU's own last log lines.
+    """
+
+    on_bus = False
+
+    def __init__(self, interface: FmuInterface, instance: str, inputs: list[str], outputs: list[str],
+                 parameters: dict, start_time: float = 0.0):
+        self.interface = interface
+        self.instance = instance
+        self.time = start_time
+        self.log: deque[str] = deque(maxlen=_LOG_LINES)
+        self._dir = Path(tempfile.mkdtemp(prefix="planthub-fmu-"))
+        self._fmu = None
+        try:
+            extract(str(interface.path), str(self._dir))
+            cls = FMU2Slave if interface.fmi_version == "2.0" else FMU3Slave
+            self._fmu = cls(guid=interface.guid, unzipDirectory=str(self._dir),
+                            modelIdentifier=interface.identifier, instanceName=instance)
+            self._v2 = interface.fmi_version == "2.0"
+            self._instantiate()
+            self._in = _Batches(self._fmu, self._v2, [interface.variables[n] for n in inputs])
+            self._out = _Batches(self._fmu, self._v2, [interface.variables[n] for n in outputs])
+            params = _Batches(self._fmu, self._v2, [interface.variables[n] for n in parameters])
+            if self._v2:
+                self._call("setupExperiment", self._fmu.setupExperiment, startTime=start_time)
+                self._call("enterInitializationMode", self._fmu.enterInitializationMode)
+            else:
+                self._call("enterInitializationMode", self._fmu.enterInitializationMode, startTime=start_time)
+            self._call("set parameters", params.set, list(parameters.values()))
+            self._call("exitInitializationMode", self._fmu.exitInitializationMode)
+            if self._v2:
+                self._raw_do_step, self._do_step = _raw(self._fmu, "fmi2DoStep"), self._do_step_2
+            else:
+                self._raw_do_step, self._do_step = _raw(self._fmu, "fmi3DoStep"), self._do_step_3
+                # eventHandlingNeeded, terminateSimulation, earlyReturn, lastSuccessfulTime
+                self._step_results = tuple(ctypes.byref(c()) for c in
+                                           (ctypes.c_bool, ctypes.c_bool, ctypes.c_bool, ctypes.c_double))
+        except BaseException:
+            self.close()
+            raise
+
+    def _instantiate(self) -> None:
+        if self._v2:
+            # The FMI 2 logger is variadic; fmpy's native proxy formats the message for us.
+            from fmpy.logging import addLoggerProxy
+
+            callbacks = fmi2CallbackFunctions()
+            callbacks.logger = _fmi2_logger
+            callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_libc.calloc)
+            callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_libc.free)
+            # fmpy's proxy keeps one Python logger for the whole process, so the messages are
+            # routed back to their instance through the component environment pointer.
+            self._env = next(_environments)
+            _fmi2_slaves[self._env] = self
+            callbacks.componentEnvironment = self._env
+            addLoggerProxy(ctypes.byref(callbacks))
+            self._callbacks = callbacks   # kept alive as long as the instance
+            self._call("instantiate", self._fmu.instantiate, callbacks=callbacks, loggingOn=False)
+        else:
+            self._call("instantiate", self._fmu.instantiate, loggingOn=False,
+                       logMessage=lambda env, status, category, message: self._logged(status, category, message))
+
+    def _logged(self, status, category, message) -> None:
+        label = _STATUS[status] if 0 <= status < len(_STATUS) else str(status)
+        text = (message or b"").decode("utf-8", "replace")
+        self.log.append(f"[{label}] {(category or b'').decode('utf-8', 'replace')}: {text}")
+
+    def _call(self, function: str, fn, *args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except FMICallException as exc:
+            status = _STATUS[exc.status] if 0 <= exc.status < len(_STATUS) else str(exc.status)
+            raise SimulationError(self._failure(f"{exc.function} returned {status}")) from None
+        except Exception as exc:
+            raise SimulationError(self._failure(f"{function} failed: {exc}")) from None
+
+    def _failure(self, what: str) -> str:
+        where = f"FMU instance {self.instance!r} ({self.interface.path.name}) at t = {self.time:.9g} s: {what}"
+        if self.log:
+            where += "\n  FMU log:\n" + "\n".join(f"    {line}" for line in self.log)
+        return where
+
+    def set_inputs(self, values: list) -> None:
+        self._call("set inputs", self._in.set, values)
+
+    def outputs(self) -> list:
+        return self._call("get outputs", self._out.get)
+
+    def step(self, t: float, h: float) -> None:
+        self.time = t
+        self._call("doStep", self._do_step, t, h)
+        self.time = t + h
+
+    def _do_step_2(self, t: float, h: float) -> None:
+        _check("fmi2DoStep", self._raw_do_step(self._fmu.component, t, h, 1))
+
+    def _do_step_3(self, t: float, h: float) -> None:
+        _check("fmi3DoStep", self._raw_do_step(self._fmu.component, t, h, True, *self._step_results))
+
+    def close(self) -> None:
+        fmu, self._fmu = self._fmu, None
+        if fmu is not None and getattr(fmu, "component", None):
+            try:
+                fmu.terminate()
+            except Exception:
+                pass   # closing after an error: the instance may refuse; freeing still matters
+            fmu.freeInstance()
+        _fmi2_slaves.pop(getattr(self, "_env", None), None)
+        shutil.rmtree(self._dir, ignore_errors=True)
+
+
+def _route_fmi2_log(env, name, status, category, message) -> None:
+    slave = _fmi2_slaves.get(env)
+    if slave is not None:
+        slave._logged(status, category, message)
+
+
+_fmi2_slaves: dict[int, FmuSlave] = {}
+_environments = itertools.count(1)
+_fmi2_logger = fmi2CallbackLoggerTYPE(_route_fmi2_log)
+_libc = ctypes.CDLL(None)
+_libc.calloc.restype = ctypes.c_void_p
+_libc.calloc.argtypes = [ctypes.c_size_t, ctypes.c_size_t]
+_libc.free.argtypes = [ctypes.c_void_p]
+
+
+class _Batches:
+    """Variables grouped by FMI type, each group with ready value-reference and value arrays."""
+
+    def __init__(self, fmu, v2: bool, variables: list[FmuVariable]):
+        self.fmu = fmu
+        self.count = len(variables)
+        self.groups = []
+        families = _FAMILY2 if v2 else _FAMILY3
+        for fmi_type in dict.fromkeys(v.fmi_type for v in variables):
+            members = [i for i, v in enumerate(variables) if v.fmi_type == fmi_type]
+            family, ctype = families[fmi_type]
+            vrs = (ctypes.c_uint32 * len(members))(*(variables[i].vr for i in members))
+            values = (ctype * len(members))()
+            prefix = "fmi2" if v2 else "fmi3"
+            # FMI 3 getters and setters also take the number of values (arrays may differ).
+            extra = () if v2 else (len(members),)
+            get, set_ = f"{prefix}Get{family}", f"{prefix}Set{family}"
+            self.groups.append((members, variables[members[0]].type, vrs, values, extra,
+                                get, _raw(fmu, get), set_, _raw(fmu, set_)))
+
+    def set(self, values: list) -> None:
+        component = self.fmu.component
+        for members, kind, vrs, buf, extra, _, _, name, setter in self.groups:
+            for k, i in enumerate(members):
+                buf[k] = _to_c(kind, values[i])
+            _check(name, setter(component, vrs, len(vrs), buf, *extra))
+
+    def get(self) -> list:
+        out = [None] * self.count
+        component = self.fmu.component
+        for members, kind, vrs, buf, extra, name, getter, _, _ in self.groups:
+            _check(name, getter(component, vrs, len(vrs), buf, *extra))
+            for k, i in enumerate(members):
+                out[i] = _from_c(kind, buf[k])
+        return out
+
+
+def _raw(fmu, name: str):
+    """The FMI function itself (fmpy has set its argument types), without fmpy's Python wrapper:
+    at every communication point that wrapper costs more than the call."""
+    return getattr(fmu.dll, name)
+
+
+def _check(function: str, status: int) -> None:
+    if status > 1:   # ok and warning pass; discard, error, fatal, pending do not
+        raise FMICallException(function=function, status=status)
+
+
+# FMI type → (function family, C type), per FMI version.
+_FAMILY2 = {
+    "Real": ("Real", ctypes.c_double), "Integer": ("Integer", ctypes.c_int32),
+    "Enumeration": ("Integer", ctypes.c_int32), "Boolean": ("Boolean", ctypes.c_int32),
+    "String": ("String", ctypes.c_char_p),
+}
+_FAMILY3 = {
+    "Float64": ("Float64", ctypes.c_double), "Int32": ("Int32", ctypes.c_int32),
+    "Enumeration": ("Int64", ctypes.c_int64), "Boolean": ("Boolean", ctypes.c_bool),
+    "String": ("String", ctypes.c_char_p),
+}
+
+
+def _to_c(kind: SlotType, value):
+    if kind is SlotType.STRING:
+        return value.encode("utf-8")
+    return value
+
+
+def _from_c(kind: SlotType, value):
+    if kind is SlotType.STRING:
+        return (value or b"").decode("utf-8")
+    if kind is SlotType.BOOL:
+        return bool(value)
+    if kind is SlotType.REAL:
+        return float(value)
+    return int(value)

@@ -1,0 +1,105 @@
+"""An FMU in a child process: a crash of the FMU's code stops the run with a message, not the hub."""
+from __future__ import annotations
+
+import multiprocessing
+import signal
+
+from hub.core.errors import SimulationError
+from hub.logic.fmi import FmuInterface, FmuSlave
+
+
+class IsolatedFmu:
+    """A logic slave (hub.core.slave) over a pipe to a child process that runs the FMU.
+
+    Each communication step costs one round trip: inputs and the step go out in one message,
+    the new outputs come back in the answer. If the child dies (a segfault in the FMU, a kill),
+    the next call raises a SimulationError naming the instance and the signal, and everything
+    the hub recorded so far stays on disk.
+    """
+
+    on_bus = False
+
+    def __init__(self, interface: FmuInterface, instance: str, inputs: list[str], outputs: list[str],
+                 parameters: dict, start_time: float = 0.0):
+        self.interface = interface
+        self.instance = instance
+        self.time = start_time
+        context = multiprocessing.get_context("spawn")   # no fork of a process that holds pybullet
+        self._conn, child = context.Pipe()
+        self._process = context.Process(
+            target=_serve, args=(child, interface, instance, inputs, outputs, parameters, start_time),
+            name=f"planthub-fmu-{instance}", daemon=True)
+        self._process.start()
+        child.close()
+        self._pending = None
+        self._latest = self._ask(("outputs",))
+
+    def _ask(self, message):
+        try:
+            self._conn.send(message)
+            kind, payload = self._conn.recv()
+        except (EOFError, BrokenPipeError, ConnectionResetError):
+            raise SimulationError(self._died()) from None
+        if kind == "error":
+            raise SimulationError(payload)
+        return payload
+
+    def _died(self) -> str:
+        self._process.join(timeout=5)
+        code = self._process.exitcode
+        if code is not None and code < 0:
+            how = f"was killed by {signal.Signals(-code).name}"
+        else:
+            how = f"exited with code {code}"
+        return (f"FMU instance {self.instance!r} ({self.interface.path.name}) at t = {self.time:.9g} s: "
+                f"its worker process {how}; the run stops here, the recording so far is kept")
+
+    def set_inputs(self, values: list) -> None:
+        self._pending = list(values)
+
+    def step(self, t: float, h: float) -> None:
+        self.time = t
+        self._latest = self._ask(("step", self._pending, t, h))
+        self.time = t + h
+
+    def outputs(self) -> list:
+        return self._latest
+
+    def close(self) -> None:
+        if self._process.is_alive():
+            try:
+                self._conn.send(("close",))
+            except (BrokenPipeError, OSError):
+                pass
+            self._process.join(timeout=5)
+        if self._process.is_alive():
+            self._process.kill()
+            self._process.join()
+        self._conn.close()
+
+
+def _serve(conn, interface, instance, inputs, outputs, parameters, start_time) -> None:
+    """The child: owns one FmuSlave and answers the parent's messages until told to close."""
+    try:
+        slave = FmuSlave(interface, instance, inputs, outputs, parameters, start_time)
+    except SimulationError as exc:
+        conn.recv()
+        conn.send(("error", str(exc)))
+        return
+    try:
+        while True:
+            message = conn.recv()
+            if message[0] == "close":
+                break
+            try:
+                if message[0] == "step":
+                    _, values, t, h = message
+                    slave.set_inputs(values)
+                    slave.step(t, h)
+                conn.send(("ok", slave.outputs()))
+            except SimulationError as exc:
+                conn.send(("error", str(exc)))
+    except EOFError:
+        pass   # the parent went away
+    finally:
+        slave.close()

@@ -1,0 +1,43 @@
+"""An FMU served over the bus as a lockstep participant (`planthub serve-fmu FILE`)."""
+from __future__ import annotations
+
+from hub.logic.fmi import FmuSlave, inspect_fmu
+from hub.logic.ports import fmu_ports
+from hub.bus.participant import Participant
+from hub.bus import wire
+
+
+class FmuParticipant(Participant):
+    """Steps one FMU instance with the inputs the hub sends; its slots are the `fmu` module's
+    (variables in the FMU's order, `events` as void slots, `map` renaming), so the hub checks
+    them against the scenario's object of the same name."""
+
+    def __init__(self, file: str, events=(), rename: dict | None = None, instance: str = "fmu"):
+        self.fmu = inspect_fmu(file)
+        self.instance = instance
+        ports = fmu_ports(self.fmu, events, rename)   # the `fmu` module's slot rules
+        causality = lambda v: self.fmu.variables[v].causality
+        self.ports_in = [(s.name, s.type, v) for s, v in ports if causality(v) == "input"]
+        self.ports_out = [(s.name, s.type, v) for s, v in ports if causality(v) == "output"]
+        self.slave = None
+
+    def interface(self):
+        return [(n, k) for n, k, _ in self.ports_in], [(n, k) for n, k, _ in self.ports_out]
+
+    def begin(self, parameters: dict, time: float) -> None:
+        variables = self.fmu.variables
+        values = {name: variables[name].type.coerce(value) for name, value in parameters.items()}
+        self.slave = FmuSlave(self.fmu, self.instance, [v for _, _, v in self.ports_in],
+                              [v for _, _, v in self.ports_out], values, time)
+
+    def advance(self, t: float, h: float, values: list) -> list:
+        self.slave.set_inputs([wire.from_wire(k, x, f"input {n!r}") for (n, k, _), x in zip(self.ports_in, values)])
+        self.slave.step(t, h)
+        return self.current_outputs()
+
+    def current_outputs(self) -> list:
+        return [wire.to_wire(k, x) for (_, k, _), x in zip(self.ports_out, self.slave.outputs())]
+
+    def close(self) -> None:
+        if self.slave is not None:
+            self.slave.close()

@@ -1,0 +1,106 @@
+"""Expectations of a scenario (`expect:`), watched at every communication point and judged after the run."""
+from __future__ import annotations
+
+import operator
+from dataclasses import dataclass, field
+
+from hub.core.slots import SlotRef, SlotType
+
+OPERATORS = {"==": operator.eq, "!=": operator.ne, "<": operator.lt, "<=": operator.le,
+             ">": operator.gt, ">=": operator.ge}
+
+
+@dataclass(frozen=True)
+class Expectation:
+    """One checked expectation: the value of `slot` compared with `value` by `op`,
+    either at the tick `at` (None: at the end of the run) or, with `always`, at every point
+    (only where the void slot `when` fired, if given). `show` names a slot whose value each
+    failure reports (which bottle it was)."""
+
+    name: str
+    slot: SlotRef
+    type: SlotType
+    op: str
+    value: object
+    always: bool = False
+    at: int | None = None
+    when: SlotRef | None = None
+    show: SlotRef | None = None
+    line: int | None = None
+
+    def describe(self) -> str:
+        when = f" whenever {self.when} fires" if self.when else ""
+        if self.always:
+            return f"{self.slot} {self.op} {self.value!r} at every point{when}"
+        return f"{self.slot} {self.op} {self.value!r} {'at the end' if self.at is None else 'at tick ' + str(self.at)}"
+
+
+@dataclass(frozen=True)
+class NoJam:
+    """`jams: none`: no bottle jammed at any time of the run (the run summary's rule,
+    hub/jams.py, with run.jam_after), judged from the plant's jam watch after the run."""
+
+    name: str
+    line: int | None = None
+
+    def describe(self) -> str:
+        return "no bottle jams at any time"
+
+    def judge(self, jams, end: float) -> Outcome:
+        if not jams:
+            return Outcome(self, True, "held")
+        listed = "; ".join(f"{j.bottle} on {j.belt} from {j.since:.4g} s"
+                           + (f" to {j.until:.4g} s" if j.until is not None else f", still at {end:.4g} s")
+                           for j in jams[:10])
+        more = f"; … {len(jams) - 10} more" if len(jams) > 10 else ""
+        return Outcome(self, False, f"{len(jams)} jammed: {listed}{more}")
+
+
+@dataclass
+class Outcome:
+    expectation: Expectation
+    passed: bool
+    message: str
+
+
+@dataclass
+class Watcher:
+    """Reads the plant's slots at every communication point and keeps what the judgement needs."""
+
+    expectations: list[Expectation]
+    index: dict[SlotRef, int]
+    rate: int
+    failures: dict[int, list[str]] = field(default_factory=dict)
+    seen: dict[int, object] = field(default_factory=dict)
+
+    def read(self, signals, ref: SlotRef, kind: SlotType):
+        i = self.index[ref]
+        return signals.fired(i) if kind is SlotType.VOID else signals.values[i]
+
+    def observe(self, tick: int, signals) -> None:
+        for n, e in enumerate(self.expectations):
+            if e.always:
+                if e.when is not None and not signals.fired(self.index[e.when]):
+                    continue
+                value = self.read(signals, e.slot, e.type)
+                if not OPERATORS[e.op](value, e.value):
+                    shown = f" ({e.show} = {signals.values[self.index[e.show]]!r})" if e.show else ""
+                    self.failures.setdefault(n, []).append(f"at {tick / self.rate:.4g} s it was {value!r}{shown}")
+            elif e.at is None or tick >= e.at:
+                if e.at is None or n not in self.seen:
+                    self.seen[n] = (tick, self.read(signals, e.slot, e.type))
+
+    def judge(self) -> list[Outcome]:
+        outcomes = []
+        for n, e in enumerate(self.expectations):
+            if e.always:
+                found = self.failures.get(n, [])
+                listed = "; ".join(found[:10]) + (f"; … {len(found) - 10} more" if len(found) > 10 else "")
+                outcomes.append(Outcome(e, not found, f"failed {len(found)}×: {listed}" if found else "held"))
+            elif n not in self.seen:
+                outcomes.append(Outcome(e, False, f"the run ended before {e.at / self.rate:.4g} s"))
+            else:
+                tick, value = self.seen[n]
+                ok = OPERATORS[e.op](value, e.value)
+                outcomes.append(Outcome(e, ok, f"{e.slot} was {value!r} at {tick / self.rate:.4g} s"))
+        return outcomes
