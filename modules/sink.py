@@ -31,6 +31,7 @@ from dataclasses import dataclass
 from hub.core.component import Component
 from hub.core.module import Module
 from hub.core.slots import Slot
+from modules.plant import FIGURES, ORDERS
 
 from modules.manifest import cargo
 from modules.trigger import add_volume, volume_parameters
@@ -137,6 +138,9 @@ class Sink(Module):
         "additionalProperties": False,
     }
     COMPONENTS = {"bin": Bin, "count": Count}
+    PLANT = True
+    TAKES_OUT = True
+    CONTRIBUTES = (FIGURES, ORDERS)
 
     @staticmethod
     def count_slots(destinations) -> tuple[Slot, ...]:

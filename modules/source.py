@@ -31,6 +31,7 @@ from hub.core.component import Component
 from hub.core.errors import SimulationError
 from hub.core.module import Module
 from hub.core.slots import Slot
+from modules.plant import FIGURES
 
 from modules.manifest import register
 from modules.params import POSITION, length
@@ -114,6 +115,8 @@ class Source(Module):
         "additionalProperties": False,
     }
     COMPONENTS = {"store": Store}
+    PLANT = True
+    CONTRIBUTES = (FIGURES,)
 
     @classmethod
     def check(cls, params):
@@ -130,6 +133,10 @@ class Source(Module):
         if duplicates:
             problems.append((("bottles",), f"duplicate ids: {', '.join(duplicates)}"))
         return problems
+
+    @classmethod
+    def supply(cls, name: str, params: dict, seed: int) -> int:
+        return len(cls.bottles(name, params, seed))
 
     @classmethod
     def bottles(cls, name: str, params: dict, seed: int) -> list[tuple[str, str]]:

@@ -1,4 +1,4 @@
-"""Helpers for bus tests: runs with a Master that is always closed, processes that are always stopped."""
+"""Helpers for bus tests: runs that are always closed, processes that are always stopped."""
 from __future__ import annotations
 
 import contextlib
@@ -8,10 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from hub.bus.commands import Commands, load_commands
-from hub.run.master import Master
-from hub.run.plant import Plant
-from hub.run.recorder import Recorder
+from hub.run.assembly import Run
 from hub.scenario.checker import load_scenario
 
 from .helpers import ROOT
@@ -21,24 +18,11 @@ BELT_PARTICIPANT = ROOT / "scenarios" / "belt_ramp_participant.yaml"
 
 
 @contextlib.contextmanager
-def hub(path, out: Path | None = None, overrides: dict | None = None, replay: Path | None = None,
-        **master_options):
-    """A built plant and its Master, for runs in pieces (`master.run(until_tick=…)`); closed after.
-    With `replay`, the operator commands recorded in that run folder are applied again."""
-    scenario = load_scenario(path, overrides)
-    with Plant(scenario) as plant:
-        columns = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
-        recorder = Recorder(columns, scenario.run.physics_rate, out)
-        if replay is not None:
-            master_options["commands"] = Commands(plant, recorder, load_commands(replay, plant))
-        master = Master(plant, recorder, **master_options)
-        try:
-            yield master
-        finally:
-            try:
-                master.close()
-            finally:
-                recorder.close()
+def hub(path, out: Path | None = None, overrides: dict | None = None, replay: Path | None = None, **options):
+    """A run put together (hub.run.assembly.Run), for runs in pieces (`run.run(until_tick=…)`);
+    closed after. With `replay`, the operator commands recorded in that run folder are applied again."""
+    with Run(load_scenario(path, overrides), out=out, replay=replay, **options) as run:
+        yield run
 
 
 def same_files(a: Path, b: Path, names=("recording.csv", "events.csv")) -> bool:

@@ -6,9 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from hub.run.master import Master
-from hub.run.plant import Plant
-from hub.run.recorder import Recorder
+from hub.run.assembly import Run
 from hub.scenario.checker import load_scenario
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -17,14 +15,9 @@ ROOT = Path(__file__).resolve().parent.parent
 def run_scenario(path, out: Path | None = None, overrides: dict | None = None):
     """Load, build and run a scenario; return (scenario, recorder, result)."""
     scenario = load_scenario(path, overrides)
-    with Plant(scenario) as plant:
-        columns = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
-        recorder = Recorder(columns, scenario.run.physics_rate, out)
-        try:
-            result = Master(plant, recorder).run()
-        finally:
-            recorder.close()
-    return scenario, recorder, result
+    with Run(scenario, out=out) as run:
+        result = run.run()
+    return scenario, run.recorder, result
 
 
 def planthub_run(scenario, out: Path, *sets: str):

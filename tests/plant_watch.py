@@ -7,9 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from hub.run.master import Master
+from hub.run.assembly import Run
 from hub.run.plant import Plant
-from hub.run.recorder import Recorder
 from hub.scenario.checker import load_scenario
 from modules.gate import TwoPositions
 from modules.robot_arm import Gripper
@@ -34,7 +33,10 @@ class Watch:
                       if isinstance(c, TwoPositions) and len(c.blocker.boxes) == 1]
         self.grippers = [c for c in self.plant.components if isinstance(c, Gripper)]
 
-    def __call__(self, tick: int, end: int) -> None:
+    def close(self, reason: str) -> None:
+        """The figures stay readable."""
+
+    def observe(self, tick: int, signals=None, events=()) -> None:
         world = self.plant.world
         # A body put into play at this point is read from the next tick on: skip it until then.
         # A held body moves with the arm, out of the dynamics: it is not judged.
@@ -70,13 +72,9 @@ def run_watched(path, out: Path | None = None, overrides: dict | None = None):
     """Load, build and run a scenario under a Watch; return (scenario, recorder, watch). The
     world compares every resting bottle with the engine at every tick (PhysicsWorld.check_rest)."""
     scenario = load_scenario(path, overrides)
-    with Plant(scenario) as plant:
-        plant.world.check_rest = True
-        columns = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
-        recorder = Recorder(columns, scenario.run.physics_rate, out)
-        watch = Watch(plant)
-        try:
-            Master(plant, recorder).run(progress=watch)
-        finally:
-            recorder.close()
-    return scenario, recorder, watch
+    with Run(scenario, out=out) as run:
+        run.plant.world.check_rest = True
+        watch = Watch(run.plant)
+        run.master.observers.append(watch)
+        run.run()
+    return scenario, run.recorder, watch

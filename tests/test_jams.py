@@ -57,7 +57,7 @@ def test_a_jam_ends_when_its_belt_stops(write_scenario, tmp_path):
 def test_bottles_a_closed_stopper_holds_are_no_jam_however_long():
     with Simulation(STOPPER) as sim:
         # The same world watched without the stopper's hold: its queue would count as jammed.
-        bare = JamWatch(sim.plant.world, sim.tally.belts, None, sim.scenario.run.jam_after)
+        bare = JamWatch(sim.plant.world, sim.figures[0].belts, None, sim.scenario.run.jam_after)
         sim.run_until(lambda s: bare.observe(s.master.tick) and False, timeout=sim.scenario.run.end_tick / 300)
         plant = sim.summary().plant
     assert plant.jams == ()

@@ -2,9 +2,7 @@
 every shipped scenario runs with the resting bottles checked against the engine."""
 import pytest
 
-from hub.run.master import Master
-from hub.run.plant import Plant
-from hub.run.recorder import Recorder
+from hub.run.assembly import Run
 from hub.scenario.checker import load_scenario
 
 from .helpers import ROOT, run_scenario
@@ -29,14 +27,17 @@ def test_resting_bottles_stay_where_the_engine_holds_them(name):
     """The scenario run with the world comparing every resting bottle with the engine at every
     tick (hub/physics/rest.py); the bottling plant's: tests/test_bottling_plant.py."""
     scenario = load_scenario(ROOT / "scenarios" / f"{name}.yaml")
-    with Plant(scenario) as plant:
-        world = plant.world
-        world.check_rest = True
-        most = 0
+    most = []
 
-        def look(tick, end):
-            nonlocal most
-            most = max(most, int(world.rest.resting.sum()))
-        with Master(plant, Recorder([], scenario.run.physics_rate)) as master:
-            result = master.run(progress=look)
+    class Look:   # an observer: how many bottles rest at each point
+        def observe(self, tick, signals, events):
+            most.append(int(world.rest.resting.sum()))
+
+        def close(self, reason):
+            pass
+    with Run(scenario, observers=[Look()]) as run:
+        world = run.plant.world
+        world.check_rest = True
+        result = run.run()
+    most = max(most)
     assert result.ticks == scenario.run.end_tick and most >= 1

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from hub.bus.session import Bus, Inbox
 from hub.core.errors import PlanthubError
+from hub.core.observer import Stop
 from hub.core.registry import did_you_mean
 from hub.core.slots import Direction, SlotType
 from hub.bus import wire
@@ -54,6 +55,7 @@ class Commands:
 
     def __init__(self, plant, recorder, replay: list[tuple[int, Command]] | None = None):
         self.recorder = recorder
+        self.rate = plant.scenario.run.physics_rate
         self.slots = {}    # "obj.comp.slot" → (index, Slot)
         feedthrough = {(c.obj, c.name, t) for c in plant.components for t, _ in c.FEEDTHROUGH}
         self._inner = set()
@@ -67,6 +69,12 @@ class Commands:
         self._forced: dict[int, object] = {}
         self._once: list[tuple[int, object]] = []
         self.stop_requested = False
+
+    def stop(self, tick: int) -> Stop | None:
+        """A stop condition (hub/core/observer.py): an operator's `stop` ends the run at its point."""
+        if self.stop_requested:
+            return Stop(f"stopped by an operator at t = {tick / self.rate:.9g} s")
+        return None
 
     # --- sources of commands -------------------------------------------------------------
     def listen(self, bus: Bus, run: str) -> None:

@@ -47,7 +47,7 @@ class DataPlane:
         self.samples = 0
         self.requests: dict[str, dict[str, int]] = {}    # viewer id → {key expression: period in ticks}
         owners = {(c.obj, c.name): c for c in plant.components}
-        self._base_needed = {id(c): c.needed for c in plant.components}
+        self.plant = plant
         self.exposed: list[_Exposed] = []
         for ref, index in plant.index.items():
             if not any(fnmatch.fnmatchcase(str(ref), p) or fnmatch.fnmatchcase(f"{ref.obj}.{ref.component}", p)
@@ -141,7 +141,5 @@ class DataPlane:
         for e in self.live:
             if e.component is not None:
                 watched.setdefault(id(e.component), set()).add(e.ref.slot)
-        for e in self.exposed:
-            comp = e.component
-            if comp is not None:
-                comp.needed = self._base_needed[id(comp)] | frozenset(watched.get(id(comp), ()))
+        for comp in {id(e.component): e.component for e in self.exposed if e.component is not None}.values():
+            self.plant.watch(comp, watched.get(id(comp), ()))

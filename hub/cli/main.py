@@ -10,12 +10,7 @@ import yaml
 
 from hub.cli.bus import add_commands as add_bus_commands, add_run_options, bus_settings
 from hub.core.errors import PlanthubError, Problem, ScenarioError
-from hub.run.master import Master
-from hub.run.plant import Plant
-from modules.plant.summary import PlantTally
-from hub.run.recorder import Recorder
 from hub.core.registry import UnknownModule, default_registry
-from hub.run.summary import RunSummary
 from hub.scenario.checker import Scenario, load_scenario
 
 
@@ -114,7 +109,7 @@ def _validate(args) -> int:
 
 def _run(args) -> int:
     from hub.bus.session import Bus
-    from hub.bus.commands import Commands, load_commands
+    from hub.run.assembly import Run
     from hub.run.pacing import Pacer
 
     scenario = _load(args)
@@ -126,64 +121,43 @@ def _run(args) -> int:
     settings = bus_settings(args, scenario)
     bus = Bus(settings) if settings is not None else None
     notice = lambda text: print(f"planthub: {text}", file=sys.stderr)
+    pacer = Pacer(scenario.run.physics_rate, args.realtime) if args.realtime else None
+    progress = [_Progress(scenario.run.end_tick)] if sys.stderr.isatty() else []
     try:
-        with Plant(scenario) as plant:
-            columns = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
-            replay = load_commands(args.replay, plant) if args.replay else None
-            recorder = Recorder(columns, scenario.run.physics_rate, out)
-            commands = Commands(plant, recorder, replay) if replay is not None else None
-            pacer = Pacer(scenario.run.physics_rate, args.realtime) if args.realtime else None
-            master = Master(plant, recorder, bus=bus, commands=commands, pacer=pacer, log=notice)
-            tally = PlantTally.for_plant(plant)
-            if tally is not None:
-                tally.observe(plant.world.tick)   # the first look, where Simulation takes it too
-            try:
-                result = master.run(progress=_at_points(tally, _Progress() if sys.stderr.isatty() else None))
-            finally:
-                master.close()
-                recorder.close()
-            summary = RunSummary(scenario.name, scenario.path, result.ticks, result.rate, scenario.run.substeps,
-                                 result.wall_seconds, recorder.stats, len(scenario.record), out,
-                                 tally.summary() if tally is not None else None)
+        with Run(scenario, out=out, bus=bus, replay=args.replay, pacer=pacer, observers=progress, log=notice) as run:
+            result = run.run()
+            run.close("the run reached its end" if not result.stopped_by else result.stopped_by)
+            summary = run.summary()
+            link = run.link
     finally:
         if bus is not None:
             bus.close()
-    summary.write(out / "summary.json")
     print("\n".join(summary.lines()))
     if result.stopped_by:
-        ended = master.orders is not None and master.orders.done()   # its orders: a run's normal end
-        print(f"  {'ended' if ended else 'stopped':<12} {result.stopped_by}")
+        print(f"  {'ended' if result.ended else 'stopped':<12} {result.stopped_by}")
     if pacer is not None:
         print(f"  pacing       {pacer.summary()}")
-    if master.dataplane is not None:
-        count = len(master.lockstep.peers)
+    if link is not None:
+        count = len(link.lockstep.peers)
         print(f"  bus          {count} participant{'s' if count != 1 else ''}, "
-              f"{master.dataplane.samples} data-plane samples")
+              f"{link.dataplane.samples} data-plane samples")
     if (out / "commands.csv").is_file():
         print(f"  commands     {out / 'commands.csv'}")
     return 0
 
 
-def _at_points(tally: PlantTally | None, progress):
-    """What runs at every communication point: the plant's jam watch, the progress display."""
-    if tally is None:
-        return progress
-    if progress is None:
-        return lambda tick, end: tally.observe(tick)
-
-    def both(tick: int, end: int) -> None:
-        tally.observe(tick)
-        progress(tick, end)
-    return both
-
-
 class _Progress:
-    """A one-line progress display on a terminal, redrawn at most twice a second."""
+    """A one-line progress display on a terminal, redrawn at most twice a second: an observer."""
 
-    def __init__(self):
+    def __init__(self, end: int):
+        self.end = end
         self.shown = self.started = time.monotonic()
 
-    def __call__(self, tick: int, end: int) -> None:
+    def close(self, reason: str) -> None:
+        """The line ends with the run."""
+
+    def observe(self, tick: int, signals, events) -> None:
+        end = self.end
         now = time.monotonic()
         if now - self.shown >= 0.5 or tick >= end:
             self.shown = now

@@ -31,6 +31,16 @@ class Module:
     COMPONENTS: ClassVar[dict[str, type[Component]]] = {}
     #: The actuator's state logic (an FMU) that a scenario attaches with `logic:`; None: it has none.
     LOGIC: ClassVar[LogicSpec | None] = None
+    #: An end of the material flow (a source, a sink): a scenario with one is a *plant*, which
+    #: gets the plant's figures, `jams: none` expectations and `run.orders`. The one definition.
+    PLANT: ClassVar[bool] = False
+    #: Takes bottles out of the plant (a sink): what `run.orders` counts.
+    TAKES_OUT: ClassVar[bool] = False
+    #: Observers and stop conditions this module contributes to every run that holds one of its
+    #: objects, as entry points "package.file:factory"; each distinct factory is called once per
+    #: run with the built plant and returns an Observer, a StopCondition, both, or None
+    #: (hub/core/observer.py).
+    CONTRIBUTES: ClassVar[tuple[str, ...]] = ()
 
     @classmethod
     def slots(cls, params: dict) -> dict[str, tuple[Slot, ...]]:
@@ -51,6 +61,11 @@ class Module:
     def check_run(cls, params: dict, run) -> list[tuple[tuple, str]]:
         """Problems of these parameters under the scenario's run settings (`RunSettings`)."""
         return []
+
+    @classmethod
+    def supply(cls, name: str, params: dict, seed: int) -> int:
+        """Bottles an object of this module puts on the line over a run (a source's store)."""
+        return 0
 
     @classmethod
     def with_defaults(cls, params: dict) -> dict:

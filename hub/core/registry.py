@@ -1,8 +1,13 @@
-"""The module registry: module names → lazily imported classes, with "did you mean" on a miss."""
+"""The module registry: module names → lazily imported classes, with "did you mean" on a miss.
+
+The kernel never imports a module type: the element modules are found by name, through the
+catalogues installed packages declare (entry points of the group `planthub.catalogues`, each a
+mapping of module name → "package.file:Class"; planthub's own is `modules:CATALOGUE`)."""
 from __future__ import annotations
 
 import difflib
 import importlib
+from importlib import metadata
 
 from hub.core.module import Module
 
@@ -33,8 +38,7 @@ class Registry:
         if name not in self._entries:
             raise UnknownModule(f"unknown module {name!r}{did_you_mean(name, self._entries)}")
         if name not in self._loaded:
-            path, _, attr = self._entries[name].partition(":")
-            self._loaded[name] = getattr(importlib.import_module(path), attr)
+            self._loaded[name] = load_entry(self._entries[name])
         return self._loaded[name]
 
 
@@ -49,8 +53,22 @@ def did_you_mean(name: str, choices) -> str:
     return ""
 
 
-def default_registry() -> Registry:
-    """The element modules that ship with planthub (listed in `modules/__init__.py`)."""
-    from modules import CATALOGUE
+def load_entry(entry: str):
+    """The object an entry point "package.file:name" (or "…:Class.attribute") names, imported now."""
+    path, _, attr = entry.partition(":")
+    found = importlib.import_module(path)
+    for part in attr.split("."):
+        found = getattr(found, part)
+    return found
 
-    return Registry(CATALOGUE)
+
+CATALOGUES = "planthub.catalogues"
+
+
+def default_registry() -> Registry:
+    """Every element module the installed catalogues declare (planthub's own: modules/__init__.py)."""
+    entries: dict[str, str] = {}
+    for point in sorted(metadata.entry_points(group=CATALOGUES), key=lambda p: p.name):
+        for name, entry in point.load().items():
+            entries.setdefault(name, entry)
+    return Registry(entries)

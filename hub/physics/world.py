@@ -388,7 +388,8 @@ class PhysicsWorld:
         if rows is None or self._rows_stale:
             rows = np.array([n for n in range(len(self._bodies)) if n not in self._parked], dtype=int)
         field, _, _ = self.fields.locate(self.positions[rows])
-        return rows, field, np.where(field >= 0, self.fields.speeds[field], 0.0)
+        speeds = self.fields.speeds[field] if len(self.fields.speeds) else np.zeros(len(field))   # a scene without belts
+        return rows, field, np.where(field >= 0, speeds, 0.0)
 
     def _parts(self, body: int):
         """The pybullet bodies of one bottle with their height relative to its centre: the body,

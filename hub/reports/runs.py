@@ -9,10 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from hub.run.master import Master
 from hub.physics.fields import ForceFields
-from hub.run.plant import Plant
-from hub.run.recorder import Recorder
+from hub.run.assembly import Run as Assembly
 from hub.scenario.checker import Scenario, load_scenario
 
 
@@ -49,16 +47,11 @@ def run(path, out: Path | None = None, overrides: dict | None = None) -> Run:
     scenario = load_scenario(path, overrides)
     with tempfile.TemporaryDirectory() as tmp:
         directory = Path(out) if out is not None else Path(tmp)
-        with Plant(scenario) as plant:
-            columns = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
-            recorder = Recorder(columns, scenario.run.physics_rate, directory)
+        with Assembly(scenario, out=directory) as assembled:
             started = time.perf_counter()
-            try:
-                Master(plant, recorder).run()
-            finally:
-                recorder.close()
+            assembled.run()
             wall = time.perf_counter() - started
-            fields = plant.world.fields   # pure numpy: usable after the world is closed
+            fields = assembled.plant.world.fields   # pure numpy: usable after the world is closed
         data = read_recording(directory / "recording.csv")
     return Run(scenario, data, fields, wall, Path(out) if out is not None else None)
 

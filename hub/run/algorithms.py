@@ -1,10 +1,22 @@
-"""Gauss-Seidel stepping of logic components: in flow order, each taking the fresh outputs of those before it."""
+"""Co-simulation algorithms: how the logic components step over a communication step (Jacobi, Gauss-Seidel), chosen by `run.master`."""
 from __future__ import annotations
 
 import heapq
 
 from hub.core.component import Component
 from hub.core.flow import Flow
+
+
+class Jacobi:
+    """Every logic component steps from t with the inputs of the point at t; outputs are seen at
+    the next point. The order of the steps cannot change a result."""
+
+    def __init__(self, components: list[Component]):
+        self.components = list(components)
+
+    def step(self, start: int, ticks: int) -> None:
+        for comp in self.components:
+            comp.step(start, ticks)
 
 
 class GaussSeidel:

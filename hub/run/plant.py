@@ -4,18 +4,18 @@ from __future__ import annotations
 from hub.core.component import Component
 from hub.scenario.expectations import Expectation
 from hub.core.flow import Flow
-from hub.run.algorithms import GaussSeidel
+from hub.run.algorithms import GaussSeidel, Jacobi
 from hub.core.module import DynamicObject
 from hub.physics import PhysicsWorld
 from hub.scenario.checker import Scenario
 from hub.core.signals import Signals
-from hub.core.slots import SlotRef
+from hub.core.slots import Direction, SlotRef
 
 
 class Plant:
     """Everything one run needs, built in a fixed order so that two builds are identical."""
 
-    def __init__(self, scenario: Scenario):
+    def __init__(self, scenario: Scenario, every_source: bool = False):
         self.scenario = scenario
         self.world = PhysicsWorld(scenario.run.physics_rate, sleep_after=scenario.run.sleep_after)
         self.world.seed = scenario.run.seed   # for modules that draw at build time (a source's destinations)
@@ -40,8 +40,16 @@ class Plant:
             read |= {ref for ref, _ in scenario.record}
             read |= {ref for e in scenario.expect if isinstance(e, Expectation)
                      for ref in (e.slot, e.when, e.show) if ref is not None}
+            # The one place that says which sources a component computes (Component.needed): those
+            # a flow, the recording or an expectation reads, or every one (`every_source`, for the
+            # Python API, which may read any slot), and those a live subscriber watches (`watch`).
+            self._needed = {}
             for comp, local in zip(self.components, local_indices):
-                needed = frozenset(r.slot for r in read if (r.obj, r.component) == (comp.obj, comp.name))
+                if every_source:
+                    needed = frozenset(s.name for s in comp.SLOTS if s.direction is Direction.SOURCE)
+                else:
+                    needed = frozenset(r.slot for r in read if (r.obj, r.component) == (comp.obj, comp.name))
+                self._needed[id(comp)] = needed
                 comp.bind(self.signals, local, needed)
             self.flows = [
                 Flow(self.index[f.source], self.index[f.target], f.condition, f.mode,
@@ -55,12 +63,17 @@ class Plant:
                 (lambda flow=self.flows[ref]: flow.run(self.signals)) if kind == "flow" else by_key[ref].react
                 for kind, ref in scenario.order if not (kind == "flow" and ref in between)
             ]
-            self.step_logic = (GaussSeidel(self.logic, list(between.values()), self.signals).step
-                               if between else self._jacobi)
+            #: Co-simulation algorithm over the logic components (run.master): steps them over an interval.
+            self.algorithm = (GaussSeidel(self.logic, list(between.values()), self.signals) if between
+                              else Jacobi(self.logic))
             self.world.start()
         except BaseException:
             self.close()
             raise
+
+    def watch(self, comp: Component, slots) -> None:
+        """Let `comp` also compute the sources `slots` (names) while someone watches them live."""
+        comp.needed = self._needed[id(comp)] | frozenset(slots)
 
     def _between_logic(self, by_key) -> dict[int, tuple]:
         """Flows from one logic component to another: flow index → (source comp, target comp, flow)."""
@@ -72,11 +85,6 @@ class Plant:
             if id(a) in logic and id(b) in logic:
                 out[i] = (a, b, self.flows[i])
         return out
-
-    def _jacobi(self, start: int, ticks: int) -> None:
-        """Every logic component steps with the inputs of the point."""
-        for comp in self.logic:
-            comp.step(start, ticks)
 
     def close(self) -> None:
         try:

@@ -69,6 +69,12 @@ class Recorder:
         self._files.append(handle)
         return csv.writer(handle, lineterminator="\n")
 
+    def observe(self, tick: int, signals: Signals, events) -> None:
+        """An observer of the run (hub/core/observer.py): the point's events, then its row."""
+        for t, slot, detail in events:
+            self.event(t, slot, detail)
+        self.sample(tick, signals)
+
     def sample(self, tick: int, signals: Signals) -> None:
         if self._rows is None:
             return
@@ -102,7 +108,7 @@ class Recorder:
             self._notices.writerow(["time", "tick", "detail"])
         self._notices.writerow([repr(tick / self.rate), tick, detail])
 
-    def close(self) -> None:
+    def close(self, reason: str = "") -> None:
         for handle in self._files:
             handle.close()
         self._files = []

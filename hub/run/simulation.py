@@ -6,15 +6,13 @@ from pathlib import Path
 from typing import Callable
 
 from hub.core.errors import PlanthubError
-from hub.scenario.expectations import Expectation, NoJam, Outcome, Watcher
-from hub.run.master import Master, RunResult
-from hub.run.plant import Plant
-from modules.plant.summary import PlantTally
-from hub.run.recorder import Recorder
 from hub.core.registry import did_you_mean
+from hub.core.slots import SlotRef, SlotType
+from hub.run.assembly import Run
+from hub.run.master import RunResult
 from hub.run.summary import RunSummary
 from hub.scenario.checker import load_scenario
-from hub.core.slots import Direction, SlotRef, SlotType
+from hub.scenario.expectations import Expectation, NoJam, Outcome, Watcher
 
 
 class Simulation:
@@ -30,45 +28,52 @@ class Simulation:
     read), so any slot can be read at any point. `out` writes recording.csv and events.csv, and
     summary.json when the simulation is closed. `summary()` gives the run summary at any point:
     for a plant (sinks, sources) bottles in, delivered, misrouted, on the line, throughput, jams.
+    The other keywords are those of hub.run.assembly.Run (`bus`, `replay`, `pacer`, `log`).
     """
 
     def __init__(self, scenario, overrides: dict | None = None, logic: dict | None = None,
-                 out: Path | None = None):
+                 out: Path | None = None, **run_options):
         changes = dict(overrides or {})
         for name, file in (logic or {}).items():
             changes[f"objects.{name}.logic"] = {"file": str(Path(file).resolve())}
         self.scenario = load_scenario(scenario, changes)
         self.out = out
-        self.wall_seconds = 0.0   # spent in run and run_until
-        self.plant = Plant(self.scenario)
+        self.events: list[tuple[float, str, str]] = []   # the event log: (time, slot, detail)
+        slots = [e for e in self.scenario.expect if isinstance(e, Expectation)]
+        self.watcher = None
+        self._run = Run(self.scenario, out=out, every_source=True, observers=[_EventLog(self)], **run_options)
         try:
-            for comp in self.plant.components:
-                comp.needed = frozenset(s.name for s in comp.SLOTS if s.direction is Direction.SOURCE)
-            run = self.scenario.run
-            columns = [(ref, kind, self.plant.index[ref]) for ref, kind in self.scenario.record]
-            self.events: list[tuple[float, str, str]] = []
-            self.recorder = _Recorder(columns, run.physics_rate, out, log=self.events)
-            self.master = Master(self.plant, self.recorder)
-            slots = [e for e in self.scenario.expect if isinstance(e, Expectation)]
-            self.watcher = Watcher(slots, self.plant.index, run.physics_rate)
-            self.tally = PlantTally.for_plant(self.plant)
-            self.master.start()   # participants on the bus are launched and awaited here
+            self.plant = self._run.plant
+            self.master = self._run.master
+            self.watcher = Watcher(slots, self.plant.index, self.scenario.run.physics_rate)
+            self.master.observers.append(self.watcher)
+            self._run.start()   # participants on the bus are launched and awaited here
             self.master.communicate()
-            self._observe(self.master.tick)
         except BaseException:
-            self.close()
+            self._run.close("the run failed")
             raise
+
+    @property
+    def recorder(self):
+        return self._run.recorder
 
     @property
     def time(self) -> float:
         return self.master.tick / self.scenario.run.physics_rate
 
+    @property
+    def figures(self) -> list:
+        """The observers the scenario's modules contribute that add to the summary (a plant's tally)."""
+        return self._run.figures
+
+    @property
+    def wall_seconds(self) -> float:
+        return self._run.wall_seconds
+
     def run(self, until: float | None = None) -> RunResult:
         """Run to `until` seconds (default: the scenario's duration)."""
         end = None if until is None else round(until * self.scenario.run.physics_rate)
-        result = self.master.run(end, progress=lambda tick, _: self._observe(tick))
-        self.wall_seconds += result.wall_seconds
-        return result
+        return self._run.run(end)
 
     def run_until(self, condition: Callable[["Simulation"], bool], timeout: float) -> bool:
         """Step until `condition(sim)` holds at a communication point (True) or `timeout`
@@ -81,24 +86,15 @@ class Simulation:
                     return False
                 self.master.advance(limit)
                 self.master.communicate()
-                self._observe(self.master.tick)
             return True
         finally:
-            self.wall_seconds += time.perf_counter() - started
-
-    def _observe(self, tick: int) -> None:
-        self.watcher.observe(tick, self.plant.signals)
-        if self.tally is not None:
-            self.tally.observe(tick)
+            self._run.wall_seconds += time.perf_counter() - started
 
     def summary(self) -> RunSummary:
         """The run summary now: what `planthub run` prints and writes to summary.json. Its
         `plant` (None without sinks and sources) has bottles_in, delivered, by_destination,
         sinks, misrouted, on_line, per_minute and jams; `as_dict()` is the JSON form."""
-        run = self.scenario.run
-        return RunSummary(self.scenario.name, self.scenario.path, self.master.tick, run.physics_rate, run.substeps,
-                          self.wall_seconds, self.recorder.stats, len(self.scenario.record), self.out,
-                          self.tally.summary() if self.tally is not None else None)
+        return self._run.summary()
 
     def __getitem__(self, slot: str):
         """The slot's value now (a void slot: whether it fired at this point)."""
@@ -124,36 +120,29 @@ class Simulation:
     def check(self) -> list[Outcome]:
         """The scenario's expectations judged on what was seen so far, in the scenario's order."""
         on_slots = iter(self.watcher.judge())
-        jams = self.tally.summary().jams if self.tally is not None else ()
+        plant = self.summary().plant
+        jams = plant.jams if plant is not None else ()
         return [e.judge(jams, self.time) if isinstance(e, NoJam) else next(on_slots) for e in self.scenario.expect]
 
     def close(self) -> None:
-        try:
-            if getattr(self, "master", None) is not None:
-                self.master.close()
-                if self.out is not None and hasattr(self, "tally"):   # built far enough to summarise
-                    self.summary().write(Path(self.out) / "summary.json")
-        finally:
-            try:
-                if getattr(self, "recorder", None) is not None:
-                    self.recorder.close()
-            finally:
-                self.plant.close()
+        self._run.close()
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
-        self.close()
+        self._run.close("the run failed" if exc[0] is not None else "closed")
 
 
-class _Recorder(Recorder):
-    """A recorder that also keeps the event log in memory, as (time, slot, detail)."""
+class _EventLog:
+    """Keeps the event log in memory, as (time, slot, detail), for `Simulation.events`."""
 
-    def __init__(self, columns, rate, directory, log: list):
-        super().__init__(columns, rate, directory)
-        self.log = log
+    def __init__(self, sim: Simulation):
+        self.log = sim.events
+        self.rate = sim.scenario.run.physics_rate
 
-    def event(self, tick: int, slot: str, detail: str) -> None:
-        super().event(tick, slot, detail)
-        self.log.append((tick / self.rate, slot, detail))
+    def observe(self, tick, signals, events) -> None:
+        self.log.extend((t / self.rate, slot, detail) for t, slot, detail in events)
+
+    def close(self, reason: str) -> None:
+        """Nothing to release: the log stays readable."""

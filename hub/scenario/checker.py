@@ -92,6 +92,15 @@ class Scenario:
     expect: tuple[Expectation, ...]
     order: tuple[tuple[str, object], ...]   # evaluation order of flows and feedthrough components
 
+    @property
+    def is_plant(self) -> bool:
+        return is_plant(self.objects)
+
+
+def is_plant(objects) -> bool:
+    """A scenario is a plant when one of its objects is an end of the material flow (Module.PLANT)."""
+    return any(obj.module.PLANT for obj in objects)
+
 
 def load_scenario(path, overrides: dict | None = None, registry: Registry | None = None) -> Scenario:
     """Read, override (dotted keys, e.g. {"run.physics_rate": 1000}), check and return a scenario."""
@@ -208,7 +217,7 @@ class _Checker:
         # The logic's own wiring comes first, so a scenario's flows into the same slot win.
         flows = self.wiring(objects, slot_tables) + self.flows(_list(data.get("flows")), slot_tables)
         record = self.record(_list(data.get("record")), slot_tables)
-        plant = any(obj.module_name in ("source", "sink") for obj in objects)   # as PlantTally.for_plant
+        plant = is_plant(objects)
         expect = self.expectations(_list(data.get("expect")), slot_tables, run, plant)
         order = self.order(flows, objects)
         if self.problems:
@@ -250,15 +259,13 @@ class _Checker:
         """`run.orders` needs sinks to deliver to, and no more orders than the sources put out."""
         if run.orders is None:
             return
-        from modules.source import Source   # the module's own rule for what a source holds
-        if not any(obj.module_name == "sink" for obj in objects):
+        if not any(obj.module.TAKES_OUT for obj in objects):
             self.problem(("run", "orders"), f"{run.orders} orders, but no sink takes bottles out: "
                                             "add a `sink` object or leave out run.orders")
             return
         if self.problems:
             return   # a source with bad parameters cannot say what it holds; its problem is reported
-        supply = sum(len(Source.bottles(obj.name, obj.params, run.seed)) for obj in objects
-                     if obj.module_name == "source")
+        supply = sum(obj.module.supply(obj.name, obj.params, run.seed) for obj in objects)
         if run.orders > supply:
             self.problem(("run", "orders"), f"{run.orders} orders, but the sources put out only {supply} bottles")
 

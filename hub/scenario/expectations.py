@@ -77,7 +77,7 @@ class Watcher:
         i = self.index[ref]
         return signals.fired(i) if kind is SlotType.VOID else signals.values[i]
 
-    def observe(self, tick: int, signals) -> None:
+    def observe(self, tick: int, signals, events=()) -> None:
         for n, e in enumerate(self.expectations):
             if e.always:
                 if e.when is not None and not signals.fired(self.index[e.when]):
@@ -89,6 +89,9 @@ class Watcher:
             elif e.at is None or tick >= e.at:
                 if e.at is None or n not in self.seen:
                     self.seen[n] = (tick, self.read(signals, e.slot, e.type))
+
+    def close(self, reason: str) -> None:
+        """Judged at any time; nothing to release."""
 
     def judge(self) -> list[Outcome]:
         outcomes = []

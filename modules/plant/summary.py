@@ -11,9 +11,9 @@ from modules.sink import Bin
 from modules.source import Store
 
 from modules.plant.jams import Jam, JamWatch
+from modules.plant.report import NO_DESTINATION, plant_lines  # noqa: F401 (NO_DESTINATION: part of the summary's API)
 from hub.physics.world import PARKED
 
-NO_DESTINATION = ""   # the destination of a bottle that has none (a `bottle` object): "" in JSON too
 BUSY = 0.9           # the line is full while it holds at least this share of the most bottles seen on it
 
 
@@ -65,7 +65,10 @@ class Busy:
 
 @dataclass(frozen=True)
 class PlantSummary:
-    """What came in, what went out where, what is left and what got stuck, over [start, end] s."""
+    """What came in, what went out where, what is left and what got stuck, over [start, end] s:
+    the plant's section of the run summary (hub/core/observer.py SummarySection)."""
+
+    key = "plant"
 
     start: float
     end: float
@@ -112,6 +115,21 @@ class PlantSummary:
             return None
         return 60.0 * (len(times) - 1) / (times[-1] - times[0])
 
+    def lines(self) -> list[str]:
+        """The plant block of the printed summary."""
+        return plant_lines(self)
+
+    def wall_detail(self) -> str:
+        """What the wall-time line adds: the real-time factor while the line was near its fullest."""
+        busy = self.busy
+        if busy is None or not busy.realtime_factor:
+            return ""
+        return f"{busy.realtime_factor:.1f}× while {busy.at_least} or more bottles were on the line, {busy.sim_seconds:.1f} s"
+
+    def wall_figures(self) -> dict:
+        """summary.json's `wall.full_line`: the same figures for machines."""
+        return {"full_line": None if self.busy is None else self.busy.as_dict()}
+
     def as_dict(self) -> dict:
         """The machine-readable form (summary.json's `plant`): plain JSON types, equal runs give equal dicts."""
         return {
@@ -140,11 +158,11 @@ class PlantSummary:
 
 
 class PlantTally:
-    """Collects a PlantSummary while a plant runs: call `observe(tick)` at communication points.
+    """Collects a PlantSummary while a plant runs: an observer (hub/core/observer.py) that sources
+    and sinks contribute to every run that holds one (Module.CONTRIBUTES).
 
     Sinks keep their own deliveries and sources their bottles, so the only work per point is the
-    jam watch (hub/jams.py), which looks every few ticks. A scene without sinks and sources is
-    not a plant in this sense: `for_plant` gives None.
+    jam watch (modules/plant/jams.py), which looks every few ticks.
     """
 
     def __init__(self, plant):
@@ -163,17 +181,18 @@ class PlantTally:
         self.watch = JamWatch(world, self.belts, holders, self.jam_after)
         self.looks: list[tuple[int, int, float]] = []   # (tick, bottles on the line, wall clock) at each look
 
-    @classmethod
-    def for_plant(cls, plant) -> PlantTally | None:
-        if any(isinstance(c, (Bin, Store)) for c in plant.components):
-            return cls(plant)
-        return None
-
-    def observe(self, tick: int) -> None:
+    def observe(self, tick: int, signals=None, events=()) -> None:
         if tick >= self.watch.due:   # a look: how many bottles are on the line, and the clock
             on_line = int((self.world.positions[:, 2] > PARKED[2] / 2).sum())
             self.looks.append((tick, on_line, time.perf_counter()))
         self.watch.observe(tick)
+
+    def close(self, reason: str) -> None:
+        """The figures stay readable after the run."""
+
+    def section(self) -> PlantSummary:
+        """This observer's part of the run summary, now."""
+        return self.summary()
 
     def _busy(self) -> tuple[int, int, Busy | None]:
         """(most on the line, the tick of the first look that saw them, the run while ≥ 90 % of them were)."""

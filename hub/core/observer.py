@@ -1,0 +1,51 @@
+"""Observers and stop conditions: what watches a run and what ends it, plugged into the master (libcosim's observer and manipulator roles)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, Sequence, runtime_checkable
+
+from hub.core.signals import Signals
+
+#: One event-log row: (tick, slot, detail).
+Event = tuple[int, str, str]
+
+
+@runtime_checkable
+class Observer(Protocol):
+    """Sees every communication point once its values are final (after step 4 of the step loop,
+    README "The step loop"): the tick, the plant's state object and the point's events in tick
+    order. It may read anything and change nothing the plant computes; what it writes goes to
+    files, the bus or its own figures. `close(reason)` is called once when the run ends, however
+    it ends."""
+
+    def observe(self, tick: int, signals: Signals, events: Sequence[Event]) -> None: ...
+
+    def close(self, reason: str) -> None: ...
+
+
+@dataclass(frozen=True)
+class Stop:
+    """Why a run ends before its duration: `ended` is a normal end (its orders were delivered),
+    otherwise it was stopped (by an operator, a signal)."""
+
+    reason: str
+    ended: bool = False
+
+
+@runtime_checkable
+class StopCondition(Protocol):
+    """Asked after every communication point: a `Stop` ends the run there, None lets it go on."""
+
+    def stop(self, tick: int) -> Stop | None: ...
+
+
+@runtime_checkable
+class SummarySection(Protocol):
+    """A part of the run summary an observer contributes (the plant's figures): printed right after
+    the wall time, and in summary.json under `key`."""
+
+    key: str
+
+    def lines(self) -> list[str]: ...
+
+    def as_dict(self) -> dict: ...

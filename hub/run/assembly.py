@@ -1,0 +1,162 @@
+"""The one place a run is put together — scenario, plant, recorder, bus side, contributed figures, master — for the CLI, the Python API, reports, tests and benchmarks."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from hub.core.observer import Observer, StopCondition
+from hub.core.registry import load_entry
+from hub.run.bus_link import BusLink
+from hub.run.master import Master, RunResult
+from hub.run.plant import Plant
+from hub.run.recorder import Recorder
+from hub.run.summary import RunSummary
+from hub.scenario.checker import Scenario
+
+
+class Run:
+    """One scenario built into a run, ready at its first communication point once started.
+
+        with Run(scenario, out=Path("runs/x")) as run:
+            result = run.run()
+            print("\\n".join(run.summary().lines()))
+
+    - `out`: the folder for recording.csv, events.csv (and commands.csv, bus_log.csv); with it,
+      `close` writes summary.json. Without, nothing is written.
+    - `bus`: an open hub.bus.session.Bus to run on (the CLI's --listen/--bus); without one, a bus
+      is opened only when logic is served over it.
+    - `replay`: operator commands to apply again (hub.bus.commands.load_commands), instead of
+      live ones from the bus.
+    - `pacer`: holds each point until its wall-clock time (hub/run/pacing.py).
+    - `every_source`: every source slot is computed, not only those something reads (the Python
+      API reads any slot at any time).
+    - `observers`, `stops`: more observers and stop conditions (hub/core/observer.py), after
+      the recorder, the bus side and what the scenario's modules contribute.
+    - `log`: a function for notices (a participant lost, where the bus listens).
+    """
+
+    def __init__(self, scenario: Scenario, *, out: Path | None = None, bus=None, replay=None, pacer=None,
+                 every_source: bool = False, observers: list[Observer] = (), stops: list[StopCondition] = (),
+                 log=None):
+        self.scenario = scenario
+        self.out = Path(out) if out is not None else None
+        self.log = log or (lambda text: None)
+        self.link = None
+        self.wall_seconds = 0.0   # spent in run (and in Simulation.run_until)
+        self._started = self._closed = False
+        self.plant = Plant(scenario, every_source=every_source)
+        try:
+            plant = self.plant
+            rate = scenario.run.physics_rate
+            columns = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
+            self.recorder = Recorder(columns, rate, self.out)
+            # Imported here: replaying needs the bus package's command parser, not a bus.
+            from hub.bus.commands import Commands, load_commands
+            commands = Commands(plant, self.recorder, load_commands(replay, plant)) if replay is not None else None
+            self.commands = commands
+            slaves = [s for c in plant.components if getattr(s := getattr(c, "slave", None), "on_bus", False)]
+            if bus is not None or slaves:
+                self.link = BusLink(plant, self.recorder, slaves, bus, commands, log=self.log)
+            self.contributed = _contributions(scenario, plant)
+            watchers = [*self.contributed, *observers]
+            self.master = Master(
+                plant,
+                observers=[self.recorder, *([self.link] if self.link else []),
+                           *[c for c in watchers if isinstance(c, Observer)]],
+                stops=[*[c for c in self.contributed if isinstance(c, StopCondition)], *stops],
+                manipulators=[commands] if commands is not None else [],
+                pacer=pacer)
+        except BaseException:
+            self._close_parts("the run could not be built")
+            raise
+
+    def start(self) -> None:
+        """Join the bus and launch and await the participants (once; `run` starts a run that is
+        not started). The first communication point is the master's first `communicate`."""
+        if self._started:
+            return
+        self._started = True
+        try:
+            if self.link is not None:
+                live = self.link.start()
+                if live is not None:
+                    self.commands = live
+                    self.master.manipulators.append(live)
+            if self.commands is not None:   # an operator's stop, live or replayed
+                self.master.stops.append(self.commands)
+        except BaseException:
+            self.master.close("the run failed")
+            raise
+
+    def run(self, until_tick: int | None = None) -> RunResult:
+        """Run to `until_tick` (default: the scenario's end, or until a stop condition holds)."""
+        self.start()
+        result = self.master.run(until_tick)
+        self.wall_seconds += result.wall_seconds
+        return result
+
+    @property
+    def tick(self) -> int:
+        return self.master.tick
+
+    @property
+    def stopped_by(self) -> str:
+        return self.master.stopped.reason if self.master.stopped is not None else ""
+
+    @property
+    def dataplane(self):
+        return self.link.dataplane if self.link is not None else None
+
+    @property
+    def lockstep(self):
+        return self.link.lockstep if self.link is not None else None
+
+    @property
+    def figures(self) -> list:
+        """The contributed observers that add a section to the summary (the plant's tally)."""
+        return [c for c in self.contributed if hasattr(c, "section")]
+
+    def summary(self) -> RunSummary:
+        """The run summary now: what `planthub run` prints and writes to summary.json."""
+        run = self.scenario.run
+        return RunSummary(self.scenario.name, self.scenario.path, self.master.tick, run.physics_rate, run.substeps,
+                          self.wall_seconds, self.recorder.stats, len(self.scenario.record), self.out,
+                          tuple(f.section() for f in self.figures))
+
+    def close(self, reason: str = "closed") -> None:
+        """End the run (participants told, files closed), write summary.json when there is a folder,
+        release the plant."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self.master.close(reason)
+            if self.out is not None:
+                self.summary().write(self.out / "summary.json")
+        finally:
+            self._close_parts(reason)
+
+    def _close_parts(self, reason: str) -> None:
+        try:
+            for part in (getattr(self, "link", None), getattr(self, "recorder", None)):
+                if part is not None:
+                    part.close(reason)
+        finally:
+            self.plant.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close("the run failed" if exc[0] is not None else "closed")
+
+
+def _contributions(scenario: Scenario, plant) -> list:
+    """The observers and stop conditions the scenario's modules contribute (Module.CONTRIBUTES):
+    each distinct factory once, in the order the objects are declared."""
+    entries = []
+    for spec in scenario.objects:
+        for entry in spec.module.CONTRIBUTES:
+            if entry not in entries:
+                entries.append(entry)
+    made = (load_entry(entry)(plant) for entry in entries)
+    return [m for m in made if m is not None]

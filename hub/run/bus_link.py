@@ -1,0 +1,72 @@
+"""The bus side of one run: the lockstep with its participants, the data plane and live operator commands."""
+from __future__ import annotations
+
+from hub.bus.commands import Commands
+from hub.bus.dataplane import DataPlane
+from hub.bus.lockstep import Lockstep
+from hub.bus.session import Bus, local_endpoint
+from hub.bus.settings import BusSettings
+from hub.bus.wire import check_run_name
+
+
+class BusLink:
+    """Joins a run to the bus: an observer (hub/core/observer.py) that publishes each point to
+    its subscribers and keeps the participants' lockstep alive, and, unless the run replays
+    recorded commands, the source of live operator commands.
+
+    `bus` is an open Bus, or None: then one is opened from the scenario's `run.bus` (or the
+    defaults) and closed with the link. `start` launches and awaits the participants, before
+    the first point.
+    """
+
+    def __init__(self, plant, recorder, slaves: list, bus: Bus | None = None, commands: Commands | None = None,
+                 log=None):
+        scenario = plant.scenario
+        self.plant = plant
+        self.recorder = recorder
+        self.log = log or (lambda text: None)
+        self.own_bus = bus is None
+        self.bus = bus if bus is not None else Bus(scenario.run.bus or BusSettings())
+        self.slaves = slaves
+        self.commands = commands
+        self.dataplane = self.lockstep = None
+        self._closed = False
+
+    def start(self) -> Commands | None:
+        """Declare the data plane and the command queue, then launch and await the participants.
+        Returns the live commands (None when the run replays its commands)."""
+        settings, plant = self.bus.settings, self.plant
+        run = check_run_name(plant.scenario.name)
+        where = ", ".join(local_endpoint(e) for e in self.bus.endpoints) or ", ".join(settings.connect)
+        self.log(f"run {run!r} on the bus ({settings.mode}, {where}): plant/{run}/**")
+        # Everything that listens is declared before the hub's liveliness token, which tells others
+        # the hub is there: a put made before a subscription is known goes nowhere.
+        self.dataplane = DataPlane(self.bus, run, plant, settings)
+        live = None
+        if self.commands is None:
+            live = self.commands = Commands(plant, self.recorder)
+            live.listen(self.bus, run)
+        self.lockstep = Lockstep(self.bus, run, self.slaves, lease=settings.lease, on_loss=settings.on_loss,
+                                 rate=plant.world.rate, log=self._notice, warn=self.log)
+        self.lockstep.start(plant.world.tick)
+        return live
+
+    def _notice(self, text: str) -> None:
+        self.recorder.notice(self.plant.world.tick, text)
+        self.log(text)
+
+    def observe(self, tick: int, signals, events) -> None:
+        self.dataplane.publish(tick, signals)
+        self.lockstep.poll()
+
+    def close(self, reason: str = "closed") -> None:
+        """Tell participants the run is over, stop the processes it launched, close a bus it opened."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            if self.lockstep is not None:
+                self.lockstep.close(reason)
+        finally:
+            if self.own_bus:
+                self.bus.close()
