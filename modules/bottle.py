@@ -102,6 +102,11 @@ def hull_points(profile) -> list[tuple[float, float, float]]:
 class Bottle(Module):
     """An upright bottle standing with the centre of its base at `position`."""
 
+    @classmethod
+    def default_hull(cls, radius: float, height: float) -> list[tuple[float, float, float]]:
+        """The points of a plain bottle's convex hull (`shape: hull` without a `profile`)."""
+        return hull_points(default_profile(radius, height))
+
     PARAMETERS = {
         "type": "object",
         "properties": {

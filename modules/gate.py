@@ -123,7 +123,7 @@ class Blocker:
 
 class Holders:
     """The parts that hold bottles back on purpose when closed (TwoPositions.HOLDS: stoppers and
-    separator gates), as one set of boxes, for the jam rule (hub/jams.py): how close each bottle
+    separator gates), as one set of boxes, for the jam rule (modules/plant/jams.py): how close each bottle
     is to a closed one, in one numpy pass however many there are."""
 
     def __init__(self, blockers: list[Blocker]):
@@ -150,7 +150,7 @@ class TwoPositions(Component):
 
     NAMES: dict[str, str] = {}
     #: Whether the part, closed, holds bottles back on purpose (a stopper, a separator's gates):
-    #: bottles queued at it stand still without being jammed (hub/jams.py). A switch blade guides.
+    #: bottles queued at it stand still without being jammed (modules/plant/jams.py). A switch blade guides.
     HOLDS: bool = False
 
     def __init__(self, obj, name, blocker: Blocker):

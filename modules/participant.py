@@ -11,7 +11,7 @@ it (in `cwd`, default the scenario's folder; `python` is the hub's own interpret
 at the end; without, it waits `join_timeout` s for one started elsewhere (`--run`, `--name`,
 `--connect`). A Python participant can be named by its module instead: `python: [MODULE, ARGS…]`
 launches `python -m MODULE ARGS…`, and with `in_process: true` the hub makes the same logic with
-MODULE's `participant(ARGS)` and steps it in its own process, without the bus (hub/inprocess.py):
+MODULE's `participant(ARGS)` and steps it in its own process, without the bus (hub/logic/inprocess.py):
 the same results, bit for bit, without the round trip. Like an FMU it steps from t to t + h with
 the inputs of t, and its outputs appear at t + h; `step` gives it its own, longer step. A void
 input is true in the steps a flow fed it; a void output true fires the event.

@@ -361,3 +361,26 @@ def test_gauss_seidel_hands_fresh_outputs_down_the_flow(fmus, write_scenario, tm
     assert a[3] == pytest.approx(0.15)
     for k in range(1 + lag, len(data)):
         assert b[k] == a[k - lag], (master, k)
+
+
+def test_an_fmus_description_is_read_once_per_load(fmus, tmp_path, monkeypatch):
+    """Checking, the slot table and the build share one reading of modelDescription.xml; an FMU
+    rebuilt (here: touched with new content) between loads is read again."""
+    import shutil
+
+    from hub.logic import fmi
+    from hub.run.plant import Plant
+
+    shutil.copy(BUILT / "belt_drive-fmi2.fmu", tmp_path / "drive.fmu")
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(SCENARIO.read_text().replace("../build/fmus/belt_drive-fmi2.fmu", "drive.fmu"))
+    reads = []
+    real = fmi.read_model_description
+    monkeypatch.setattr(fmi, "read_model_description", lambda path, **kw: reads.append(path) or real(path, **kw))
+    with Plant(load_scenario(scene)):
+        pass
+    assert len(reads) == 1
+    with zipfile.ZipFile(tmp_path / "drive.fmu", "a") as archive:   # a new version of the file
+        archive.writestr("documentation/note.txt", "rebuilt")
+    load_scenario(scene)
+    assert len(reads) == 2

@@ -67,7 +67,7 @@ class DataPlane:
         bus.watch_tokens(wire.control_key(run, "viewer", "*"), lambda m: inbox.put(("viewer", m)))
 
     def publish(self, tick: int, signals) -> None:
-        """Step 6 of the loop: send what subscribers asked for at this point."""
+        """Send what subscribers asked for at this point (the observe step of the step loop, hub/run/master.py)."""
         if not self.inbox.empty():
             self.update()
         if not self.live:

@@ -1,8 +1,8 @@
-"""The Zenoh bus: every Zenoh call planthub makes goes through this file.
+"""The Zenoh session: every Zenoh call planthub makes goes through this file.
 
 Received samples reach the caller through callbacks that only append to an `Inbox`; the main
 thread waits on that queue (which releases the GIL), never inside Zenoh. A callback that did real
-work would starve while the main thread steps the physics (DESIGN, Zenoh notes).
+work would starve while the main thread steps the physics (measured: callbacks wait for the GIL).
 """
 from __future__ import annotations
 
@@ -129,7 +129,7 @@ class Bus:
 
     A session in peer or router mode with no listen endpoint listens on a free loopback port (tls/
     with a certificate in `settings.tls`), so a plain run reaches nothing beyond this machine;
-    `endpoints` tells where others connect. TLS and access control: hub/tls.py, README.
+    `endpoints` tells where others connect. TLS and access control: hub/bus/tls.py, README.
     Gossip and multicast scouting stay off unless `scouting` is on: participants reach the hub
     at its endpoints, never each other.
     """

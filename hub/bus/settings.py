@@ -18,7 +18,7 @@ class BusSettings:
     on_loss: str = "stop"                # stop | pause: what a lost participant does to the run
     publish_period: float = 0.0          # s between data-plane samples nobody asked a rate for
     expose: tuple[str, ...] = ("*",)     # slots on the data plane: patterns of object.component.slot
-    tls: TlsSettings | None = None       # certificates for tls/ endpoints (hub/tls.py)
+    tls: TlsSettings | None = None       # certificates for tls/ endpoints (hub/bus/tls.py)
     control: tuple[str, ...] | None = None   # access control: the certificate common names that may
                                              # act on the control plane; None: whoever joins may
     publish: str = "every"               # every | change: a data-plane slot goes out at each due point, or when changed

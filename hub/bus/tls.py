@@ -1,6 +1,6 @@
 """TLS on the bus: the certificates of `run.bus.tls`, their checks, and why a handshake was refused.
 
-Zenoh itself reads the files (hub/bus.py puts their paths into its configuration). What Zenoh
+Zenoh itself reads the files (hub/bus/session.py puts their paths into its configuration). What Zenoh
 does not do well is tell what is wrong: a file that is not a certificate comes back as "peer sent
 no certificates", and a refused handshake only as a log line while the session waits on. So the
 files are checked here first, and a connection that does not come up is tried once more with
@@ -61,7 +61,7 @@ def problems(tls: TlsSettings | None, listen, connect, *, listening: bool,
         if secure(endpoint) and not tls.certificate:
             found.append((("listen", i), f"listening on {endpoint} needs a certificate and its key"))
     if listening and not listen and tls.certificate:
-        listen = ["tls/127.0.0.1:0"]   # what the hub listens on without listen endpoints (hub/bus.py)
+        listen = ["tls/127.0.0.1:0"]   # what the hub listens on without listen endpoints (hub/bus/session.py)
     if (listen or connect) and not any(secure(e) for e in listen + connect):
         found.append((("tls",), f"no endpoint uses it ({', '.join(listen + connect)}): write tls/HOST:PORT"))
     found += [(("tls", field), message) for field, message in file_problems(tls)]

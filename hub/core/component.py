@@ -10,7 +10,7 @@ from hub.core.slots import Direction, Slot, SlotType
 class Component:
     """Base of every component. Subclasses declare `SLOTS` and override the step hooks they need.
 
-    Step hooks, called by the master in this order each communication step:
+    Step hooks, called by the master in the order of the step loop (hub/run/master.py):
     `sense(tick)` writes sources from the world; `react()` (only for components that declare
     `FEEDTHROUGH`) computes sources from targets while flows are evaluated; `actuate()` reads
     targets and applies them to the world; `step(tick, ticks)` advances a logic component
@@ -37,13 +37,13 @@ class Component:
         self.needed = needed
 
     def sense(self, tick: int) -> None:
-        """Write this step's source values (step 1 of the loop)."""
+        """Write this point's source values (sense, step 1 of the step loop, hub/run/master.py)."""
 
     def react(self) -> None:
         """Compute feedthrough sources from targets already written in this step."""
 
     def actuate(self) -> None:
-        """Apply this step's target values to the world (step 4 of the loop)."""
+        """Apply this point's target values to the world (actuate, step 3 of the step loop)."""
 
     def step(self, tick: int, ticks: int) -> None:
         """Advance own logic over [tick, tick + ticks] with the inputs of this point; its new

@@ -12,8 +12,8 @@ Event = tuple[int, str, str]
 
 @runtime_checkable
 class Observer(Protocol):
-    """Sees every communication point once its values are final (after step 4 of the step loop,
-    README "The step loop"): the tick, the plant's state object and the point's events in tick
+    """Sees every communication point once its values are final (observe, step 4 of the step loop,
+    hub/run/master.py): the tick, the plant's state object and the point's events in tick
     order. It may read anything and change nothing the plant computes; what it writes goes to
     files, the bus or its own figures. `close(reason)` is called once when the run ends, however
     it ends."""

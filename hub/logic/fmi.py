@@ -65,10 +65,26 @@ class FmuInterface:
 
 
 def inspect_fmu(path: Path) -> FmuInterface:
-    """Read an FMU's interface without loading its binary; FmuError says why it cannot be used."""
+    """Read an FMU's interface without loading its binary; FmuError says why it cannot be used.
+
+    Each version of a file is read once: the scenario check, the slot table and the build of
+    an object (and every object naming the same FMU) share the reading, keyed by the file's
+    resolved path, modification time and size, so an FMU rebuilt between two loads is read again.
+    """
     path = Path(path)
     if not path.is_file():
         raise FmuError(f"{path}: no such FMU file")
+    stat = path.stat()
+    key = (str(path.resolve()), stat.st_mtime_ns, stat.st_size)
+    if key not in _INSPECTED:
+        _INSPECTED[key] = _read_interface(path)
+    return _INSPECTED[key]
+
+
+_INSPECTED: dict[tuple[str, int, int], FmuInterface] = {}
+
+
+def _read_interface(path: Path) -> FmuInterface:
     if not zipfile.is_zipfile(path):
         raise FmuError(f"{path}: not an FMU (an FMU is a zip archive)")
     with zipfile.ZipFile(path) as archive:

@@ -5,6 +5,7 @@ import statistics
 import time
 from dataclasses import dataclass
 
+from hub.core.registry import default_registry
 from hub.physics import PhysicsWorld
 from hub.physics.frames import Pose, Straight
 
@@ -21,9 +22,8 @@ class Cost:
 
 
 def _profile(radius: float, height: float):
-    from modules.bottle import default_profile, hull_points
-
-    return hull_points(default_profile(radius, height))
+    # The bottle module's own shape, found by name: the kernel imports no module type.
+    return default_registry().get("bottle").default_hull(radius, height)
 
 
 def world_cost(model: str, shape: str, bottles: int, on_belt: bool, ticks: int, rate: int = 150) -> float:

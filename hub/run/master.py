@@ -28,34 +28,44 @@ class RunResult:
 
 
 class Master:
-    """Runs the step loop. This docstring is where it is written down (README "The step loop"
-    quotes it); every other file refers to it by that name.
+    """Runs the step loop. This docstring is where the loop is written down; README's "The step
+    loop" quotes it word for word (tests/test_layers.py checks), and every other file refers to it.
 
-    Time is the physics tick count; seconds are only derived for output. At every
+    Time is an integer count of physics ticks (`1/physics_rate` s); seconds are derived only for
+    output. One communication step holds `communication_step × physics_rate` ticks. At each
     communication point, in this order:
 
-    1. **sense** — every component writes its sources from the world: triggers what happened at
-       every tick since the last point (latched), bodies their pose and velocity, logic the
-       outputs of its last step; then the manipulators (operator commands) set sources;
+    1. **sense** — every component writes its sources from the world: volume triggers report
+       what happened at every tick since the last point (latched, so a bottle that enters and
+       leaves between two points gives both events), bodies their pose and velocity, logic the
+       outputs of its last step; then operator commands set sources;
     2. **flows** — flows and zero-delay components are evaluated in the order fixed at load
-       time; then the manipulators set targets;
+       time; then operator commands set targets;
     3. **actuate** — every component applies its targets to the world (belt speed, run/stop);
-    4. **observe** — every observer sees the point's final values and its events in tick order
-       (the recorder writes the row and the event log, the data plane publishes, the plant's
-       figures look); then every stop condition is asked whether the run ends here.
+    4. **observe** — every observer sees the point's final values and its events in tick order:
+       the recorder writes the row and the event log, the bus publishes what subscribers watch,
+       the plant's figures take their look; then every stop condition may end the run here.
 
-    Then, to reach the next point, 5. **physics** — the world runs the communication step's
-    ticks (force fields and triggers at every tick; with `event_driven`, it stops at the tick
-    after a trigger event), and 6. **logic** — the co-simulation algorithm (`run.master`:
-    Jacobi or Gauss-Seidel, hub/run/algorithms.py) steps the logic components over the same
-    interval from t with the inputs flows gave them at t; their outputs are sensed at the next
-    point. Without `event_driven` the interval is known beforehand and 6 runs before 5, which
-    gives the same results and lets participants on the bus compute while the physics runs.
+    Then, to reach the next point, the physics runs the step's ticks (force fields applied and
+    triggers evaluated at every tick), and the logic steps over the same interval from t with
+    the inputs it got at this point: with `run.master: jacobi` (the default) every logic
+    component alike, its outputs sensed at the next point; with `gauss-seidel` in the order of
+    the flows between them, a flow from one's output to another's input handing the fresh value
+    over between their two steps (a ring is cut at its first declared member). Without events
+    the logic steps before the physics, which gives the same results and lets participants on
+    the bus compute meanwhile. A source reports the world as sensed in step 1, so an actuator's
+    own state source (`belt.drive.running`) shows a command from the next point on.
+
+    With `run.event_driven: true`, a trigger event (an object entering or leaving a volume) ends
+    the communication step at the tick after it happened, and the following step lasts one
+    tick: the logic sees the event at once and its answer reaches the plant one physics tick
+    later, whatever the communication step. The regular grid of points is kept; event points
+    come in between.
 
     The master knows no plant element, transport or file: what records, publishes, tallies or
-    judges a run is an Observer, what ends it early a StopCondition, what changes slots from
-    outside a manipulator (hub/core/observer.py); the run assembly (hub/run/assembly.py)
-    plugs them in. A pacer holds each point until its wall-clock time.
+    judges a run is an Observer, what ends it early a StopCondition, what sets slots from outside
+    (operator commands, a replay) a manipulator (hub/core/observer.py); the run assembly
+    (hub/run/assembly.py) plugs them in. A pacer holds each point until its wall-clock time.
     """
 
     def __init__(self, plant: Plant, *, observers: list[Observer] = (), stops: list[StopCondition] = (),

@@ -22,6 +22,7 @@ from hub.core.slots import Direction, Slot, SlotRef, SlotType
 from hub.bus.settings import BusSettings
 from hub.bus.tls import TlsSettings
 from hub.bus.tls import problems as tls_problems
+from hub.scenario.model import FlowSpec, ObjectSpec, RunSettings, Scenario, is_plant  # noqa: F401 (re-exported)
 from hub.scenario.yamlsource import Lines, format_path, line_of, load_yaml
 
 _SLOT_REF = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*){1,2}$")
@@ -37,69 +38,6 @@ def _dict(value) -> dict:
 
 def _list(value) -> list:
     return value if isinstance(value, list) else []
-
-
-@dataclass(frozen=True)
-class RunSettings:
-    physics_rate: int        # ticks per second
-    substeps: int            # physics ticks per communication step
-    end_tick: int            # a whole number of communication steps
-    seed: int
-    event_driven: bool = False   # a trigger event ends the communication step at its tick
-    master: str = "jacobi"       # or "gauss-seidel": how logic components step (hub/gauss_seidel.py)
-    jam_after: float = 5.0       # s a bottle stands still on a running belt, not held at a gate, to be jammed (hub/jams.py)
-    sleep_after: float = 0.05    # s a bottle stands still where nothing drives it before it rests (hub/physics/rest.py); 0: never
-    orders: int | None = None    # the run ends once the sinks took this many bottles (hub/orders.py); None: at its duration
-    bus: BusSettings | None = None   # None: no `run.bus` section
-
-    @property
-    def dt(self) -> float:
-        return 1.0 / self.physics_rate
-
-
-@dataclass(frozen=True)
-class ObjectSpec:
-    name: str
-    module: type[Module]
-    module_name: str
-    params: dict             # with defaults filled in
-    logic: dict | None = None   # `fmu` module parameters of the attached state logic
-    logic_module: type[Module] | None = None   # the module that builds it (`fmu`)
-
-
-@dataclass(frozen=True)
-class FlowSpec:
-    source: SlotRef
-    target: SlotRef
-    type: SlotType
-    condition: Condition
-    mode: Mode
-    rearm: SlotRef | None
-    line: int | None
-
-
-@dataclass(frozen=True)
-class Scenario:
-    """A checked scenario: everything the plant builder needs, nothing left to validate."""
-
-    path: Path
-    name: str
-    description: str
-    run: RunSettings
-    objects: tuple[ObjectSpec, ...]
-    flows: tuple[FlowSpec, ...]
-    record: tuple[tuple[SlotRef, SlotType], ...]
-    expect: tuple[Expectation, ...]
-    order: tuple[tuple[str, object], ...]   # evaluation order of flows and feedthrough components
-
-    @property
-    def is_plant(self) -> bool:
-        return is_plant(self.objects)
-
-
-def is_plant(objects) -> bool:
-    """A scenario is a plant when one of its objects is an end of the material flow (Module.PLANT)."""
-    return any(obj.module.PLANT for obj in objects)
 
 
 def load_scenario(path, overrides: dict | None = None, registry: Registry | None = None) -> Scenario:

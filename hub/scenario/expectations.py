@@ -38,7 +38,7 @@ class Expectation:
 @dataclass(frozen=True)
 class NoJam:
     """`jams: none`: no bottle jammed at any time of the run (the run summary's rule,
-    hub/jams.py, with run.jam_after), judged from the plant's jam watch after the run."""
+    modules/plant/jams.py, with run.jam_after), judged from the plant's jam watch after the run."""
 
     name: str
     line: int | None = None
