@@ -44,19 +44,20 @@ def test_duplicate_object_names(write_scenario):
 
 
 def test_a_name_yaml_reads_as_a_boolean_is_named_and_checked_as_the_name(write_scenario):
-    """YAML 1.1 reads an unquoted `off` as false: said so, and the name still checks as written."""
+    """YAML reads an unquoted `true` as a boolean: said so, and the name still checks as written.
+    Scenarios are read as YAML 1.2, so `off`, `yes` and `no` are names (YAML 1.1 made them booleans)."""
     path = write_scenario("""
         planthub: 1
         objects:
+          true: {module: constant, type: bool, value: true}
           off: {module: constant, type: bool, value: true}
-          b: {module: constant, type: bool, value: true}
         flows:
-          - {from: of.value.out, to: b.value.set, when: target}
+          - {from: tru.value.out, to: off.value.set, when: target}
         """)
     found, _ = problems(path)
     assert found == [
-        f"{path}:3: objects.off: YAML reads the name off as the boolean False: write it in quotes ('off')",
-        f"{path}:6: flows[0].from: unknown object 'of' in 'of.value.out' (did you mean 'off'?)"]
+        f"{path}:3: objects.true: YAML reads the name true as the boolean True: write it in quotes ('true')",
+        f"{path}:6: flows[0].from: unknown object 'tru' in 'tru.value.out' (did you mean 'true'?)"]
 
 
 def test_duplicate_bottle_ids(write_scenario):

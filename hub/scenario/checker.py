@@ -47,9 +47,27 @@ def load_scenario(path, overrides: dict | None = None, registry: Registry | None
     if data is None:
         raise ScenarioError(problems)
     problems += _apply_overrides(data, overrides or {}, str(path))
+    problems += _non_finite(data, (), lines, str(path))
     checker = _Checker(path, data, lines, registry or default_registry())
     checker.problems[:0] = problems
+    # A value already reported (not finite, an unknown tag) is not judged again by the schema.
+    checker.settled = {p.path for p in problems if p.path}
     return checker.check()
+
+
+def _non_finite(node, path: tuple, lines: Lines, file: str) -> list[Problem]:
+    """Every NaN or infinity in the document, reported at its place and replaced by None: no
+    number of a scenario may be non-finite (JSON Schema's `number` would take them)."""
+    found = []
+    items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
+    for key, value in list(items):
+        if isinstance(value, float) and not math.isfinite(value):
+            found.append(Problem(file, line_of(lines, path + (key,)), format_path(path + (key,)),
+                                 f"{value!r} is not a finite number"))
+            node[key] = None
+        elif isinstance(value, (dict, list)):
+            found += _non_finite(value, path + (key,), lines, file)
+    return found
 
 
 def _apply_overrides(data, overrides: dict, file: str) -> list[Problem]:
@@ -119,9 +137,18 @@ class _Checker:
         self.registry = registry
         self.problems: list[Problem] = []
         self.broken: set[str] = set()
+        self.settled: set[str] = set()     # paths already reported while reading: not judged again
+        self.rejected: list[tuple] = []    # paths the schema rejected: the meaning checks skip them
 
     def problem(self, path: tuple, message: str) -> None:
-        self.problems.append(Problem(self.file, line_of(self.lines, path), format_path(path), message))
+        where = format_path(path)
+        if any(where == s or where.startswith((s + ".", s + "[")) for s in self.settled):
+            return
+        self.problems.append(Problem(self.file, line_of(self.lines, path), where, message))
+
+    def intact(self, path: tuple) -> bool:
+        """Whether the schema found nothing wrong at or below `path`."""
+        return not any(r[:len(path)] == path for r in self.rejected)
 
     def check(self) -> Scenario:
         """Check shape (JSON Schema) and meaning together, so one run reports every problem.
@@ -137,6 +164,7 @@ class _Checker:
         validator = jsonschema.Draft202012Validator(schema)
         for error in sorted(validator.iter_errors(data), key=lambda e: [str(p) for p in e.absolute_path]):
             where = at + tuple(error.absolute_path)
+            self.rejected.append(where)
             if error.validator == "additionalProperties":
                 known = error.schema.get("properties", {})
                 for key in sorted(set(error.instance) - set(known)):
@@ -402,8 +430,8 @@ class _Checker:
         out = []
         for i, spec in enumerate(specs):
             at = ("expect", i)
-            if not isinstance(spec, dict):
-                continue
+            if not isinstance(spec, dict) or not self.intact(at):
+                continue   # the schema's problem is reported; judging its meaning would only guess
             if "jams" in spec:
                 others = sorted(set(spec) - {"name", "jams"})
                 if others:
