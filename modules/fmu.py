@@ -57,6 +57,8 @@ class Fmu(Module):
             "participant": {"enum": ["launch", "join"],
                             "description": "serve the FMU over the bus: launch — the hub starts `planthub serve-fmu`; "
                                            "join — one started elsewhere joins (default: in the hub)"},
+            "on_bad_value": {"enum": ["stop", "hold"], "default": "stop",
+                             "description": "a non-finite real from the logic: stop the run, or hold the last good value (logged)"},
             "join_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
                              "description": "s to wait for the participant to join (and to rejoin in a paused run)"},
         },
@@ -146,4 +148,5 @@ class Fmu(Module):
         as_pairs = lambda pairs: [(s.name, s.type is SlotType.VOID) for s, _ in pairs]
         every = round(params["step"] * world.rate) if "step" in params else None
         return {"logic": LogicComponent(name, "logic", tuple(s for s, _ in ports), slave,
-                                        as_pairs(inputs), as_pairs(outputs), world.rate, every)}
+                                        as_pairs(inputs), as_pairs(outputs), world.rate, every,
+                                        params["on_bad_value"])}

@@ -48,6 +48,8 @@ class ParticipantModule(Module):
                            "description": "with `python`: run the logic inside the hub, not as a process on the bus"},
             "cwd": {"type": "string", "x-path": True, "default": ".",
                     "description": "folder the command runs in, relative to the scenario file"},
+            "on_bad_value": {"enum": ["stop", "hold"], "default": "stop",
+                             "description": "a non-finite real from the logic: stop the run, or hold the last good value (logged)"},
             "join_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
                              "description": "s to wait for it to join (and to rejoin in a paused run)"},
             "step": {"type": "number", "exclusiveMinimum": 0,
@@ -90,5 +92,6 @@ class ParticipantModule(Module):
         as_pairs = lambda pairs: [(n, k is SlotType.VOID) for n, k in pairs]
         every = round(params["step"] * world.rate) if "step" in params else None
         return {"logic": LogicComponent(name, "logic", cls.slots(params)["logic"], slave,
-                                  as_pairs(inputs), as_pairs(outputs), world.rate, every)}
+                                  as_pairs(inputs), as_pairs(outputs), world.rate, every,
+                                  params["on_bad_value"])}
 

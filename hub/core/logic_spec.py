@@ -38,6 +38,7 @@ OPTIONS = {
         "map": {"type": "object", "additionalProperties": {"type": "string"}},
         "isolate": {"type": "boolean"},
         "step": {"type": "number", "exclusiveMinimum": 0},
+        "on_bad_value": {"enum": ["stop", "hold"]},
     },
     "additionalProperties": False,
 }

@@ -1,7 +1,16 @@
 """The `logic` component of an FMU or participant object: feeds its slave the inputs of a point and brings back its outputs."""
 from __future__ import annotations
 
+import logging
+
 from hub.core.component import Component
+from hub.core.errors import SimulationError
+from hub.core.slots import SlotType
+
+log = logging.getLogger("planthub.logic")
+
+#: What a non-finite real from the logic does: stop the run (the default), or hold the last good value.
+ON_BAD_VALUE = ("stop", "hold")
 
 
 class LogicComponent(Component):
@@ -11,9 +20,14 @@ class LogicComponent(Component):
     are held back until the point at t + h, so the result does not depend on when the master
     calls it in between. They are fetched only there (`slave.outputs()`), so logic served by a
     participant computes while the hub goes on: the step is sent in `step`, collected in `sense`.
+
+    Every output is checked where it enters the plant, when it is fetched: a real (or a vec3 or
+    quat) that is not finite stops the run naming the slot, the tick and the time, or, with
+    `on_bad_value: hold`, keeps the slot's last good value and logs each occurrence.
     """
 
-    def __init__(self, obj, name, slots, slave, inputs, outputs, rate: int, every: int | None):
+    def __init__(self, obj, name, slots, slave, inputs, outputs, rate: int, every: int | None,
+                 on_bad_value: str = "stop"):
         super().__init__(obj, name)
         self.SLOTS = slots
         self.slave = slave
@@ -25,6 +39,13 @@ class LogicComponent(Component):
         self.ready_at = None      # the tick at which the last step's outputs are due
         self._reads = ()          # (slot number, is event) per input, in the FMU's order
         self._writes = ()         # (slot number, is event) per output
+        self.on_bad_value = on_bad_value
+        kinds = {s.name: s.type for s in slots}
+        numeric = (SlotType.REAL, SlotType.VEC3, SlotType.QUAT)
+        #: (position in the outputs, slot name, scalar?) of every output that must be finite
+        self._numeric = tuple((k, slot, kinds[slot] is SlotType.REAL) for k, (slot, event) in enumerate(outputs)
+                              if not event and kinds[slot] in numeric)
+        self.bad_values = 0       # non-finite outputs held (on_bad_value: hold)
 
     def bind(self, signals, index, needed):
         super().bind(signals, index, needed)
@@ -32,9 +53,34 @@ class LogicComponent(Component):
         self._reads = tuple((index[slot], event) for slot, event in self.inputs)
         self._writes = tuple((index[slot], event) for slot, event in self.outputs)
 
+    def _fetch(self, tick: int) -> None:
+        outputs = self.slave.outputs()
+        for k, slot, scalar in self._numeric:
+            value = outputs[k]
+            # x − x is 0.0 for every finite float, NaN for NaN and ±inf: one subtraction per output.
+            if value is not None and (value - value != 0.0 if scalar else any(x - x != 0.0 for x in value)):
+                outputs = list(outputs)
+                outputs[k] = self._bad(tick, slot, value)
+        self.latest, self.ready_at = outputs, None
+
+    def _bad(self, tick: int, slot: str, value):
+        """The value to use in place of a non-finite one, or a SimulationError (on_bad_value: stop)."""
+        where = f"{self.obj}.{self.name}.{slot}"
+        what = getattr(self.slave, "instance", self.obj)
+        when = f"at t = {tick / self.rate:.9g} s (tick {tick})"
+        if self.on_bad_value == "stop":
+            raise SimulationError(f"{where}: the logic {what!r} gave {value!r} {when}; every value entering the "
+                                  f"plant must be finite, so the run stops here (on_bad_value: hold keeps the last "
+                                  f"good value instead)")
+        self.bad_values += 1
+        held = self.signals.values[self.index[slot]]
+        log.warning("%s: the logic %r gave %r %s; holding the last good value %r (on_bad_value: hold)",
+                    where, what, value, when, held)
+        return held
+
     def sense(self, tick):
         if self.latest is None or (self.ready_at is not None and tick >= self.ready_at):
-            self.latest, self.ready_at = self.slave.outputs(), None
+            self._fetch(tick)
         signals = self.signals
         values, active = signals.values, signals.active
         for (i, event), value in zip(self._writes, self.latest):   # Signals.emit, inlined
@@ -59,7 +105,7 @@ class LogicComponent(Component):
     def emit_ready(self, tick):
         if self.ready_at != tick:
             return False   # stepping on its own grid: its outputs belong to a later point
-        self.latest, self.ready_at = self.slave.outputs(), None
+        self._fetch(tick)
         self.sense(tick)
         return True
 

@@ -1,5 +1,5 @@
 """Test participants: the belt drive slowed down on alternate steps, stalling once, failing at a given
-time, or sending a wrongly typed output."""
+time, sending a wrongly typed output or NaN."""
 import sys
 import time
 
@@ -46,8 +46,19 @@ class SaysOneForTrue(BeltDrive):
         self.running = int(self.running)
 
 
+class NanAt(BeltDrive):
+    """Answers NaN for its speed from `nan_at` on: the hub must not let it reach the belt."""
+
+    parameters = {"ramp": 0.5, "nan_at": 0.5}
+
+    def step(self, t, h):
+        super().step(t, h)
+        if t >= self.nan_at:
+            self.speed = float("nan")
+
+
 KINDS = {"slow": SlowOnEvenSteps, "fails": FailsAt, "plain": BeltDrive, "ints": SaysOneForTrue,
-         "stalls": StallsOnce}
+         "stalls": StallsOnce, "nan": NanAt}
 
 
 def participant(argv):
