@@ -9,6 +9,8 @@ may arrive in any order; each is filed under its sender.
 """
 from __future__ import annotations
 
+import logging
+import secrets
 import time
 from dataclasses import dataclass, field
 
@@ -19,6 +21,8 @@ from hub.core.registry import did_you_mean
 from hub.core.slots import SlotType
 from hub.bus.tls import environment as tls_environment
 from hub.bus import wire
+
+_log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -43,6 +47,8 @@ class RemoteSpec:
 class _Peer:
     slave: object   # hub.logic.remote.RemoteSlave: the bus side knows it by its spec, link and counters
     process: Launched | None = None
+    token: str | None = None           # handed to a launched process: its hello must carry it
+    refused: str = ""                  # why the last hello under its name was refused (for the time-out message)
     id: str | None = None              # the participant's own id, from its hello
     welcomed: bool = False
     ready: bool = False                # initial outputs received after the last welcome
@@ -114,7 +120,9 @@ class Lockstep:
         connect = [local_endpoint(e) for e in self.bus.endpoints] + list(self.bus.settings.connect)
         # A Zenoh router forwards only for clients; a peer hub talks to its peers directly.
         mode = "peer" if self.bus.settings.mode == "peer" else "client"
-        env = {"PLANTHUB_RUN": self.run, "PLANTHUB_NAME": spec.name, "PLANTHUB_CONNECT": ",".join(connect),
+        peer.token = secrets.token_hex(16)
+        env = {"PLANTHUB_RUN": self.run, "PLANTHUB_NAME": spec.name, "PLANTHUB_TOKEN": peer.token,
+               "PLANTHUB_CONNECT": ",".join(connect),
                "PLANTHUB_MODE": mode, "PLANTHUB_LEASE": repr(self.lease),
                "PLANTHUB_JOIN_TIMEOUT": repr(spec.join_timeout),
                **tls_environment(self.bus.settings.tls, loopback=not self.bus.settings.connect)}
@@ -125,6 +133,12 @@ class Lockstep:
         otherwise), each within its join timeout; a launched process that ends first is reported
         with its last output lines."""
         started = time.monotonic()
+        if verb == "join":   # a rejoin is announced by _pause, with its reason
+            for peer in peers:
+                if not done(peer):
+                    spec = peer.slave.spec
+                    how = "launched, " if peer.process else ""
+                    _log.info(f"waiting for {spec.label} to join ({how}up to {spec.join_timeout:g} s)")
         while True:
             waiting = [p for p in peers if not done(p)]
             if not waiting:
@@ -146,6 +160,7 @@ class Lockstep:
                    if peer.process else
                    f"start it with the run name {self.run!r} and the hub's endpoint ({where or 'see run.bus'})")
         seen = "; it said hello but sent no initial outputs" if peer.welcomed else ""
+        seen += f"; a hello under its name was refused: {peer.refused}" if peer.refused and not peer.welcomed else ""
         return (f"{spec.label} did not {verb} within {spec.join_timeout:g} s: {started}{seen}"
                 f"{self._tail(peer)}")
 
@@ -301,13 +316,21 @@ class Lockstep:
             if ident == peer.id:
                 self._welcome(name, ident)   # its welcome was lost: say it again
             else:
-                self._welcome(name, ident, error=f"participant {name!r} is already on the bus (id {peer.id})")
+                self._refuse(peer, ident, f"participant {name!r} is already on the bus (id {peer.id})")
+            return
+        if peer.token is not None and hello.get("token") != peer.token:
+            # The hub launched this participant: only the process it started knows the token.
+            self._refuse(peer, ident, f"{peer.slave.spec.label} is launched by the hub, and this hello does not carry "
+                                      "the token its process was given (PLANTHUB_TOKEN): another process")
             return
         problems = misfit(peer.slave.spec, inputs, outputs)
         if problems:
             error = f"{peer.slave.spec.label} does not fit the scenario: " + "; ".join(problems)
             self._welcome(name, ident, error=error)
-            raise SimulationError(error)
+            if peer.process is not None:
+                raise SimulationError(error)   # the process the hub launched will not change: stop now
+            self._refuse(peer, ident, error, answered=True)   # one that joins may be a stranger: wait on
+            return
         in_names = [n for n, _ in inputs]
         out_names = [n for n, _ in outputs]
         spec = peer.slave.spec
@@ -320,6 +343,14 @@ class Lockstep:
         peer.id, peer.welcomed, peer.ready, peer.lost = ident, True, False, False
         peer.sent_at = time.monotonic()
         self._welcome(name, ident)
+
+    def _refuse(self, peer: _Peer, ident: str | None, error: str, answered: bool = False) -> None:
+        """Refuse a hello without disturbing the run: say why to its sender and in the log."""
+        if not answered:
+            self._welcome(peer.name, ident, error=error)
+        if error != peer.refused:   # a repeated hello (every 0.5 s) is logged once
+            self.warn(f"refused a hello for {peer.name!r} (id {ident!r}): {error}")
+        peer.refused = error
 
     def _welcome(self, name: str, ident: str | None, error: str | None = None) -> None:
         if error is None:

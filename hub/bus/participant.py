@@ -18,8 +18,8 @@ the outputs read after it. Where to connect comes from the command line (`--run`
 from __future__ import annotations
 
 import argparse
+import logging
 import os
-import sys
 import time
 import traceback
 import uuid
@@ -36,6 +36,8 @@ from hub.bus import wire
 _RESERVED = {"inputs", "outputs", "parameters", "start", "step", "close", "interface", "begin", "advance",
              "current_outputs"}
 
+
+_log = logging.getLogger(__name__)   # a process that sets up no logging still gets its errors on stderr
 
 __all__ = ["Participant", "serve", "add_options", "add_tls_options", "check_options", "tls_settings"]
 
@@ -189,7 +191,7 @@ def serve(logic: Participant, argv=None, args: argparse.Namespace | None = None)
         with _Link(logic, args) as link:
             return link.serve()
     except PlanthubError as exc:
-        print(f"planthub participant {args.name!r}: {exc}", file=sys.stderr)
+        _log.error(f"planthub participant {args.name!r}: {exc}")
         return 1
 
 
@@ -272,8 +274,11 @@ class _Link:
         """Wait for the hub, say hello until welcomed, start the logic, send the initial outputs."""
         limit = self.args.join_timeout
         deadline = time.monotonic() + limit
-        hello = wire.pack({"protocol": wire.PROTOCOL, "name": self.name, "id": self.id, "agent": wire.AGENT,
-                           "inputs": wire.interface(self.inputs), "outputs": wire.interface(self.outputs)})
+        hello = {"protocol": wire.PROTOCOL, "name": self.name, "id": self.id, "agent": wire.AGENT,
+                 "inputs": wire.interface(self.inputs), "outputs": wire.interface(self.outputs)}
+        if os.environ.get("PLANTHUB_TOKEN"):   # launched by the hub: prove it is the process it started
+            hello["token"] = os.environ["PLANTHUB_TOKEN"]
+        hello = wire.pack(hello)
         sent_at = None
         while True:
             now = time.monotonic()

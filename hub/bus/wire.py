@@ -12,6 +12,9 @@ from hub.core.slots import SlotRef, SlotType
 PROTOCOL = 1
 MSGPACK = "application/msgpack"          # Zenoh encoding of every control message
 AGENT = "planthub-python/0.1"
+#: The largest control message or data-plane sample decoded, bytes: a step of the bottling plant's
+#: router is under 200 bytes; anything near this is a mistake or an attack, and is refused unread.
+MAX_MESSAGE = 1 << 20
 
 
 class WireError(PlanthubError):
@@ -75,12 +78,20 @@ def value_packer(kind: SlotType):
 
 
 def unpack_value(kind: SlotType, data: bytes):
-    """The canonical Python value of a data-plane payload (None for void)."""
+    """The canonical Python value of a data-plane payload (None for void); WireError if it is not one."""
+    if len(data) > MAX_MESSAGE:
+        raise WireError(f"a {kind.value} sample of {len(data)} bytes (at most {MAX_MESSAGE})")
     if kind is SlotType.VOID:
         return None
     if kind is SlotType.STRING:
-        return data.decode("utf-8")
-    values = _STRUCTS[kind].unpack(data)
+        try:
+            return bytes(data).decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise WireError(f"a string sample that is not UTF-8 ({exc.reason} at byte {exc.start})") from None
+    s = _STRUCTS[kind]
+    if len(data) != s.size:
+        raise WireError(f"a {kind.value} sample is {s.size} bytes, this one {len(data)}")
+    values = s.unpack(data)
     return values if kind in (SlotType.VEC3, SlotType.QUAT) else values[0]
 
 
@@ -90,6 +101,9 @@ def pack(message) -> bytes:
 
 
 def unpack(data: bytes):
+    """A control message; WireError for anything that is not one msgpack value of at most MAX_MESSAGE bytes."""
+    if len(data) > MAX_MESSAGE:
+        raise WireError(f"a message of {len(data)} bytes (at most {MAX_MESSAGE})")
     try:
         return msgpack.unpackb(data, raw=False, strict_map_key=False)
     except Exception as exc:   # msgpack raises several types for bad input
@@ -158,13 +172,16 @@ def interface(pairs) -> list[list[str]]:
     return [[name, kind.value] for name, kind in pairs]
 
 
+_TYPE_NAMES = frozenset(t.value for t in SlotType)
+
+
 def read_interface(entries, what: str) -> list[tuple[str, SlotType]]:
     if not isinstance(entries, list):
         raise WireError(f"{what}: expected a list of [name, type] pairs, got {entries!r}")
     out = []
     for entry in entries:
         if not (isinstance(entry, list) and len(entry) == 2 and isinstance(entry[0], str)
-                and entry[1] in {t.value for t in SlotType}):
+                and isinstance(entry[1], str) and entry[1] in _TYPE_NAMES):
             raise WireError(f"{what}: expected [name, type] with type one of "
                             f"{', '.join(t.value for t in SlotType)}, got {entry!r}")
         out.append((entry[0], SlotType(entry[1])))
@@ -182,7 +199,8 @@ def step_message(n: int, tick: int, ticks: int, t: float, h: float, inputs: list
 
 def read_step(data: bytes):
     message = unpack(data)
-    if not (isinstance(message, list) and len(message) == 6 and isinstance(message[5], list)):
+    if not (isinstance(message, list) and len(message) == 6 and isinstance(message[5], list)
+            and all(type(x) is int for x in message[:3]) and all(isinstance(x, (int, float)) for x in message[3:5])):
         raise WireError(f"step message: expected [n, tick, ticks, t, h, inputs], got {message!r}")
     return message
 

@@ -28,6 +28,7 @@ def main() -> int:
         output = bus.publisher(f"{me}/output", "application/msgpack")
         bus.declare_token(me)
         hello = msgpack.packb({"protocol": 1, "name": name, "id": ident, "agent": "from-the-doc",
+                               "token": os.environ["PLANTHUB_TOKEN"],   # launched by the hub
                                "inputs": [["speed_setpoint", "real"], ["run", "bool"]],   # our own order
                                "outputs": [["running", "bool"], ["speed", "real"]]})
         hub_seen, said_hello, welcome = False, 0.0, None

@@ -1,0 +1,111 @@
+"""Broken or hostile messages on the bus never crash the hub and never take a participant's place:
+every decoder raises only WireError, a stranger's hello is refused with a reason while the run goes
+on, and a launched participant's name is only the launched process's. The stranger here is a plain
+Zenoh session in the test process, writing what schemas/wire.md describes."""
+from __future__ import annotations
+
+import threading
+import time
+
+import msgpack
+import pytest
+
+from hub.bus import wire
+from hub.bus.session import Bus, Inbox
+from hub.bus.settings import BusSettings
+from hub.core.slots import SlotType
+
+from .bus_support import BELT_PARTICIPANT, hub, output_of, process
+from .helpers import ROOT
+
+RUN = "belt_ramp_participant"
+FITTING = {"protocol": 1, "id": "stranger", "inputs": [["run", "bool"], ["speed_setpoint", "real"]],
+           "outputs": [["speed", "real"], ["running", "bool"]]}
+
+
+@pytest.mark.parametrize("kind, data", [
+    (SlotType.REAL, b"\x00" * 7), (SlotType.VEC3, b"\x00" * 25), (SlotType.INT, b""), (SlotType.BOOL, b"\x00\x00"),
+    (SlotType.STRING, b"\xff\xfe"), (SlotType.REAL, b"\x00" * (wire.MAX_MESSAGE + 1))])
+def test_a_bad_sample_gives_a_wire_error(kind, data):
+    with pytest.raises(wire.WireError):
+        wire.unpack_value(kind, data)
+
+
+@pytest.mark.parametrize("data", [b"\xc1", b"\x92\x01", b"\x00" * (wire.MAX_MESSAGE + 1), b"\xdd\xff\xff\xff\xff"])
+def test_a_bad_control_message_gives_a_wire_error(data):
+    with pytest.raises(wire.WireError):
+        wire.unpack(data)
+
+
+@pytest.mark.parametrize("step", [[0, 0, 1, 0.0, 0.01, "no list"], ["n", 0, 1, 0.0, 0.01, []], [0, 0, 1, "t", 0.01, []], 7])
+def test_a_bad_step_message_gives_a_wire_error(step):
+    with pytest.raises(wire.WireError):
+        wire.read_step(msgpack.packb(step))
+
+
+@pytest.mark.parametrize("entries", [[["a", ["real"]]], [["a", {"real": 1}]], [[1, "real"]], "real", [["a", "float"]]])
+def test_a_hello_interface_of_any_shape_gives_a_wire_error(entries):
+    with pytest.raises(wire.WireError):
+        wire.read_interface(entries, "inputs")
+
+
+class Stranger:
+    """Another process on the bus: once the hub is there, says each hello and collects the welcomes."""
+
+    def __init__(self, bus: Bus, hellos: list[tuple[str, object]]):
+        self.bus, self.hellos = bus, hellos
+        self.welcomes = Inbox()
+        for name in {n for n, _ in hellos}:
+            bus.subscribe(wire.logic_key(RUN, name, "welcome"), lambda m: self.welcomes.put(wire.unpack(m.payload)))
+        self.hub = Inbox()
+        bus.watch_tokens(wire.hub_token(RUN), lambda m: self.hub.put(m.alive))
+        self.thread = threading.Thread(target=self._say, daemon=True)
+        self.thread.start()
+
+    def _say(self):
+        if self.hub.get(20) is not True:
+            return
+        time.sleep(0.2)   # the hub's hello subscription is declared before its token
+        for name, hello in self.hellos:
+            self.bus.put(wire.logic_key(RUN, name, "hello"), msgpack.packb(hello), wire.MSGPACK)
+
+    def refusals(self, timeout=10.0) -> list[str]:
+        out, deadline = [], time.monotonic() + timeout
+        while len(out) < len(self.hellos) and (item := self.welcomes.get(deadline - time.monotonic())) is not None:
+            if item.get("id") == "stranger" and not item.get("accepted"):
+                out.append(item["error"])
+        return out
+
+
+def test_a_hello_that_no_decoder_takes_is_refused_and_the_run_goes_on(tmp_path):
+    """The unhashable hello that killed the hub, a hello for no object, and a fitting hello for the
+    launched participant that lacks its token: each refused, the run ends normally."""
+    bad = {"protocol": 1, "id": "stranger", "inputs": [["a", ["real"]]], "outputs": []}
+    with Bus(BusSettings()) as bus, Bus(BusSettings(connect=tuple(bus.endpoints)), listen=False) as other:
+        stranger = Stranger(other, [("ghost", bad), ("drive", FITTING)])
+        with hub(BELT_PARTICIPANT, tmp_path, {"run.duration": 1.0}, bus=bus) as run:
+            result = run.run()
+        assert result.ticks == 150
+        refusals = stranger.refusals()
+    assert "bad hello: inputs: expected [name, type] with type one of void, bool, int, real, vec3, quat, string, " \
+           "got ['a', ['real']]" in refusals
+    assert any("this hello does not carry the token its process was given" in r
+               or "is already on the bus" in r for r in refusals), refusals
+
+
+def test_a_misfit_hello_while_the_hub_waits_for_a_joiner_does_not_abort_the_join(tmp_path):
+    """A stranger's wrong hello is refused; the real participant, joining after it, runs the scene."""
+    misfit = {**FITTING, "outputs": [["speed", "int"], ["running", "bool"]]}
+    scene = tmp_path / "joined.yaml"
+    scene.write_text(BELT_PARTICIPANT.read_text().replace("    command: [python, -m, modules.belt_drive_logic]\n", ""))
+    overrides = {"name": RUN, "run.duration": 1.0, "objects.drive.join_timeout": 20}
+    with Bus(BusSettings()) as bus, Bus(BusSettings(connect=tuple(bus.endpoints)), listen=False) as other:
+        stranger = Stranger(other, [("drive", misfit)])
+        with hub(scene, tmp_path / "out", overrides, bus=bus) as run:
+            with process("-m", "modules.belt_drive_logic", "--run", RUN, "--name", "drive",
+                         "--connect", bus.endpoints[0]) as proc:
+                result = run.run()
+                assert output_of(proc)[0] == 0
+        assert result.ticks == 150
+        (refusal,) = stranger.refusals()
+    assert refusal.startswith("participant 'drive' does not fit the scenario: its output 'speed' is int")
