@@ -99,14 +99,14 @@ def test_logic_on_a_module_without_one_and_bad_logic_options(fmus, write_scenari
           bottle: {module: bottle, position: [0, 0, 0], logic: default}
           belt: {module: conveyor, position: [0, 0, 0], length: 1, logic: {fil: x.fmu}}
           other: {module: conveyor, position: [0, 1, 0], length: 1, logic: {file: nope.fmu}}
-          third: {module: conveyor, position: [0, 2, 0], length: 1, logic: yes}
+          third: {module: conveyor, position: [0, 2, 0], length: 1, logic: true}
         """)
     assert problems(path) == [
         f"{path}:3: objects.bottle.logic: module 'bottle' has no state logic to attach",
         f"{path}:4: objects.belt.logic.fil: unknown key 'fil' (did you mean 'file'?)",
         f"{path}:5: objects.other.logic.file: {path.parent / 'nope.fmu'}: no such FMU file",
         f"{path}:6: objects.third.logic: expected `default` or a mapping of file, parameters, map, isolate, "
-        f"step, got True",
+        f"step, on_bad_value, got True",
     ]
 
 

@@ -33,7 +33,7 @@ def test_passing_expectations_exit_0_and_write_junit(fmus, tmp_path):
     assert proc.stdout.splitlines()[-1] == "4 passed, 0 failed"
     suite = ElementTree.parse(tmp_path / "report.xml").getroot().find("testsuite")
     assert (suite.get("name"), suite.get("tests"), suite.get("failures")) == ("switch_logic", "4", "0")
-    assert [c.get("name") for c in suite] == [
+    assert [c.get("name") for c in suite.findall("testcase")] == [
         "B is diverted into the branch", "A runs straight on",
         "the blade is in working position by 0.5 s", "only B reaches the branch"]
 
@@ -125,3 +125,48 @@ def test_python_api_launches_and_stops_participants(fmus, tmp_path):
         assert sim.run_until(lambda s: s["drive.logic.speed"] == 0.5, timeout=3.0)
         sim.run()
     assert (reference / "recording.csv").read_bytes() == (tmp_path / "bus" / "recording.csv").read_bytes()
+
+
+def never_fired_scene(write_scenario, extra=""):
+    return write_scenario(f"""
+        planthub: 1
+        run: {{duration: 1.0}}
+        objects:
+          belt: {{module: conveyor, position: [0, 0, 0], length: 1.0, speed: 0.0}}
+          barrier: {{module: light_barrier, position: [0.5, 0, 0.05]}}
+        expect:
+          - name: only the empty belt passes
+            slot: barrier.trigger.object
+            when: barrier.trigger.on_enter
+            always: {{"==": nothing}}{extra}
+        """)
+
+
+def test_an_always_whose_when_never_fired_is_never_judged_and_fails(write_scenario):
+    with Simulation(never_fired_scene(write_scenario)) as sim:
+        sim.run()
+        (outcome,) = sim.check()
+    assert not outcome.passed
+    assert outcome.message == ("never judged: barrier.trigger.on_enter never fired "
+                               "(say `allow_empty: true` if that is a pass)")
+
+
+def test_allow_empty_lets_an_unjudged_always_pass(write_scenario):
+    with Simulation(never_fired_scene(write_scenario, "\n            allow_empty: true")) as sim:
+        sim.run()
+        (outcome,) = sim.check()
+    assert outcome.passed and outcome.message == "held at 0 points"
+
+
+def test_allow_empty_goes_with_always_and_when(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        objects:
+          belt: {module: conveyor, position: [0, 0, 0], length: 1.0}
+        expect:
+          - {slot: belt.drive.running, is: {"==": true}, allow_empty: true}
+        """)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    assert str(info.value.problems[0]) == (f"{path}:5: expect[0].allow_empty: `allow_empty` goes with `always` and "
+                                           "`when`: only those can go unjudged")

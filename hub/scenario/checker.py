@@ -471,8 +471,13 @@ class _Checker:
                 continue
             tick = round(spec["at"] * run.physics_rate) if "at" in spec else None
             name = spec.get("name") or f"{spec['slot']} {op} {raw!r}"
+            if "allow_empty" in spec and not (key == "always" and when):
+                self.problem(at + ("allow_empty",), "`allow_empty` goes with `always` and `when`: only those can "
+                                                    "go unjudged")
+                continue
             out.append(Expectation(name, slot[0], kind, op, value, key == "always", tick,
-                                   when[0] if when else None, show[0] if show else None, line_of(self.lines, at)))
+                                   when[0] if when else None, show[0] if show else None, line_of(self.lines, at),
+                                   spec.get("allow_empty") is True))
         return out
 
     def order(self, flows: list[FlowSpec], objects: list[ObjectSpec]):

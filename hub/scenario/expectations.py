@@ -15,7 +15,8 @@ class Expectation:
     """One checked expectation: the value of `slot` compared with `value` by `op`,
     either at the tick `at` (None: at the end of the run) or, with `always`, at every point
     (only where the void slot `when` fired, if given). `show` names a slot whose value each
-    failure reports (which bottle it was)."""
+    failure reports (which bottle it was). An `always` whose `when` never fired was never
+    judged: it fails, unless `allow_empty` says that is fine."""
 
     name: str
     slot: SlotRef
@@ -27,6 +28,7 @@ class Expectation:
     when: SlotRef | None = None
     show: SlotRef | None = None
     line: int | None = None
+    allow_empty: bool = False
 
     def describe(self) -> str:
         when = f" whenever {self.when} fires" if self.when else ""
@@ -72,6 +74,7 @@ class Watcher:
     rate: int
     failures: dict[int, list[str]] = field(default_factory=dict)
     seen: dict[int, object] = field(default_factory=dict)
+    judged: dict[int, int] = field(default_factory=dict)   # points an `always` was judged at
 
     def read(self, signals, ref: SlotRef, kind: SlotType):
         i = self.index[ref]
@@ -82,6 +85,7 @@ class Watcher:
             if e.always:
                 if e.when is not None and not signals.fired(self.index[e.when]):
                     continue
+                self.judged[n] = self.judged.get(n, 0) + 1
                 value = self.read(signals, e.slot, e.type)
                 if not OPERATORS[e.op](value, e.value):
                     shown = f" ({e.show} = {signals.values[self.index[e.show]]!r})" if e.show else ""
@@ -99,7 +103,14 @@ class Watcher:
             if e.always:
                 found = self.failures.get(n, [])
                 listed = "; ".join(found[:10]) + (f"; … {len(found) - 10} more" if len(found) > 10 else "")
-                outcomes.append(Outcome(e, not found, f"failed {len(found)}×: {listed}" if found else "held"))
+                if found:
+                    outcomes.append(Outcome(e, False, f"failed {len(found)}×: {listed}"))
+                elif not self.judged.get(n) and not e.allow_empty:
+                    outcomes.append(Outcome(e, False, f"never judged: {e.when} never fired "
+                                                      "(say `allow_empty: true` if that is a pass)"))
+                else:
+                    outcomes.append(Outcome(e, True, f"held at {self.judged.get(n, 0)} points"
+                                            if e.when is not None else "held"))
             elif n not in self.seen:
                 outcomes.append(Outcome(e, False, f"the run ended before {e.at / self.rate:.4g} s"))
             else:
