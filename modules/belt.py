@@ -61,6 +61,9 @@ class BeltDrive(Component):
         self.emit("running", self.running)
         self.emit("velocity", self.speed if self.running else 0.0)
 
+    def held(self, slot):
+        return {"run": self.running, "speed": self.speed}.get(slot)
+
     def actuate(self):
         if self.updated("speed"):
             self.speed = self.value("speed")

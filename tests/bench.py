@@ -12,9 +12,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from hub.run.master import Master
+from hub.run.assembly import Run
 from hub.run.plant import Plant
-from hub.run.recorder import Recorder
 from hub.scenario.checker import load_scenario
 
 from .bench_plant import plant_elements
@@ -36,18 +35,15 @@ def timed(fn) -> float:
 
 def hub_run(scenario, out: Path | None):
     def go():
-        with Plant(scenario) as plant:
-            cols = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
-            recorder = Recorder(cols, scenario.run.physics_rate, out)
-            try:
-                Master(plant, recorder).run()
-            finally:
-                recorder.close()
-            return recorder
+        # With `out`, Run also writes summary.json at close, which the old Master-with-Recorder did not.
+        with Run(scenario, out=out) as run:
+            run.run()
+        return run.recorder
     return go
 
 
 def floor_run(scenario):
+    """The floor: pybullet alone steps the plant's bodies (not a run: a bare Plant)."""
     def go():
         with Plant(scenario) as plant:
             plant.world.step_engine_only(scenario.run.end_tick)

@@ -10,10 +10,8 @@ import time
 from pathlib import Path
 
 from hub.bus.session import Bus, Inbox, wait_until
-from hub.run.master import Master
-from hub.run.plant import Plant
-from hub.run.recorder import Recorder
 from hub.bus.settings import BusSettings
+from hub.run.assembly import Run
 from hub.scenario.checker import load_scenario
 
 from .helpers import ROOT
@@ -95,29 +93,23 @@ class HubLoop:
     """The hub's full loop with its participants, joined and warmed up before any clock starts."""
 
     def __init__(self, path: Path):
-        scenario = load_scenario(path)
-        self.plant = Plant(scenario)
+        self.run = Run(load_scenario(path))
         try:
-            self.master = Master(self.plant, Recorder([], scenario.run.physics_rate))
-            self.master.start()
-            self.master.run(until_tick=WARM_UP)
+            self.run.start()
+            self.run.run(until_tick=WARM_UP)
         except BaseException:
             self.close()
             raise
 
     def rate(self, steps: int) -> float:
         """Steps per second over the next `steps` steps (one tick each)."""
-        master = self.master
+        run = self.run
         started = time.perf_counter()
-        master.run(until_tick=master.tick + steps)
+        run.run(until_tick=run.tick + steps)
         return steps / (time.perf_counter() - started)
 
     def close(self) -> None:
-        try:
-            if hasattr(self, "master"):
-                self.master.close()
-        finally:
-            self.plant.close()
+        self.run.close()
 
 
 def bus_lockstep() -> None:
@@ -176,33 +168,32 @@ def point_cost(path: Path, subscribers: int | None, period: float | None, publis
     """Seconds per communication point and data-plane samples per point of one run."""
     scenario = load_scenario(path, {"run.duration": 20.0})
     points = scenario.run.end_tick // scenario.run.substeps
-    with Plant(scenario) as plant:
-        bus = Bus(BusSettings(publish=publish)) if subscribers is not None else None
-        viewer = None
-        try:
-            with Master(plant, Recorder([], scenario.run.physics_rate), bus=bus) as master:
-                master.start()   # bus set-up and joining are not timed
-                if subscribers:
-                    viewer = subprocess.Popen([sys.executable, "-m", "tests.participants.viewer", scenario.name,
-                                               bus.endpoints[0], *([str(period)] * bool(period))],
-                                              cwd=ROOT, stdout=subprocess.DEVNULL)
-                    plane = master.dataplane
-                    if not wait_until(lambda: (plane.update(), len(plane.live) == len(plane.exposed)
-                                               and bool(plane.requests) == bool(period))[1], 30):
-                        raise RuntimeError("the viewer did not subscribe")
-                started = time.perf_counter()
-                master.run(until_tick=scenario.run.end_tick - scenario.run.substeps)
-                cost = (time.perf_counter() - started) / points
-                samples = master.dataplane.samples / points if master.dataplane is not None else 0.0
-        finally:
-            if bus is not None:
-                bus.close()
-            if viewer is not None:
-                try:
-                    viewer.wait(15)
-                except subprocess.TimeoutExpired:
-                    viewer.kill()
-                    viewer.wait()
+    bus = Bus(BusSettings(publish=publish)) if subscribers is not None else None
+    viewer = None
+    try:
+        with Run(scenario, bus=bus) as run:
+            run.start()   # bus set-up and joining are not timed
+            if subscribers:
+                viewer = subprocess.Popen([sys.executable, "-m", "tests.participants.viewer", scenario.name,
+                                           bus.endpoints[0], *([str(period)] * bool(period))],
+                                          cwd=ROOT, stdout=subprocess.DEVNULL)
+                plane = run.dataplane
+                if not wait_until(lambda: (plane.update(), len(plane.live) == len(plane.exposed)
+                                           and bool(plane.requests) == bool(period))[1], 30):
+                    raise RuntimeError("the viewer did not subscribe")
+            started = time.perf_counter()
+            run.run(until_tick=scenario.run.end_tick - scenario.run.substeps)
+            cost = (time.perf_counter() - started) / points
+            samples = run.dataplane.samples / points if run.dataplane is not None else 0.0
+    finally:
+        if bus is not None:
+            bus.close()
+        if viewer is not None:
+            try:
+                viewer.wait(15)
+            except subprocess.TimeoutExpired:
+                viewer.kill()
+                viewer.wait()
     return cost, samples
 
 

@@ -9,9 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from hub.run.master import Master
 from hub.physics import PhysicsWorld
-from hub.run.plant import Plant
+from hub.run.assembly import Run
 from hub.scenario.checker import load_scenario
 
 from .helpers import ROOT
@@ -46,11 +45,11 @@ def judge(path: Path, bottles: int) -> dict:
     neighbours, the deepest sinking into the floor; over the run: the largest tilt."""
     scenario = load_scenario(path)
     face = FACE + float(dict((o.name, o.params) for o in scenario.objects)["stop"]["position"][0]) - 1.0
-    with Plant(scenario) as plant:
-        w, last = plant.world, scenario.run.end_tick - RATE
-        seen = {"depth": [], "overlap": [], "sink": [], "tilt": 0.0}
+    last = scenario.run.end_tick - RATE
+    seen = {"depth": [], "overlap": [], "sink": [], "tilt": 0.0}
 
-        def watch(tick, end):
+    class Watch:   # an observer: it also sees the first point (tick 0), which the old progress callback did not
+        def observe(self, tick, signals, events):
             seen["tilt"] = max(seen["tilt"], max(math.degrees(w.tilt(n)) for n in range(bottles)))
             if tick > last:
                 p = w.positions[:bottles]
@@ -59,7 +58,12 @@ def judge(path: Path, bottles: int) -> dict:
                 seen["overlap"].append(float(np.maximum(0.06 - gaps, 0.0).mean()) if bottles > 1 else 0.0)
                 seen["sink"].append(float(-(p[:, 2] - w.half_heights[:bottles]).min()))
 
-        Master(plant).run(progress=watch)
+        def close(self, reason):
+            pass
+
+    with Run(scenario, observers=[Watch()]) as run:
+        w = run.plant.world
+        run.run()
     return {"depth": 1000 * max(seen["depth"]), "overlap": 1000 * max(seen["overlap"]),
             "sink": 1000 * max(seen["sink"]), "tilt": seen["tilt"]}
 
@@ -74,14 +78,13 @@ def cost(path: Path) -> tuple[float, float]:
     hub, bare = [], []
     for _ in range(REPEATS):
         for sample, engine_only in ((hub, False), (bare, True)):
-            with Plant(scenario) as plant:
-                master = Master(plant)
-                master.run(until_tick=formed)
+            with Run(scenario) as run:
+                run.run(until_tick=formed)
                 start = time.process_time()
-                if engine_only:
-                    plant.world.step_engine_only(ticks)
+                if engine_only:   # the floor: pybullet alone steps the run's bodies on from where it stands
+                    run.plant.world.step_engine_only(ticks)
                 else:
-                    master.run(until_tick=formed + ticks)
+                    run.run(until_tick=formed + ticks)
                 sample.append((time.process_time() - start) / ticks * 1e6)
     return statistics.median(hub), statistics.median(bare)
 

@@ -9,10 +9,9 @@ from pathlib import Path
 
 import yaml
 
-from hub.run.master import Master
-from hub.run.plant import Plant
-from modules.plant.summary import PlantTally
+from hub.run.assembly import Run
 from hub.scenario.checker import load_scenario
+from modules.plant.summary import PlantTally
 
 
 
@@ -36,6 +35,21 @@ def queue_scene(bottles: int, held: bool) -> Path:
     return path
 
 
+class Timed:
+    """An observer that passes each point on to `tally` and adds the time spent in it to `spent[0]`."""
+
+    def __init__(self, tally: PlantTally, spent: list[float]):
+        self.tally, self.spent = tally, spent
+
+    def observe(self, tick, signals, events) -> None:
+        started = time.perf_counter()
+        self.tally.observe(tick, signals, events)
+        self.spent[0] += time.perf_counter() - started
+
+    def close(self, reason: str) -> None:
+        self.tally.close(reason)
+
+
 def measure(path: Path, ticks: int, settle: int, repeats: int, overrides=None) -> tuple[float, float, float]:
     """(µs per tick without the summary, with it, of which inside its looks), medians of `repeats`,
     each pair run alternately after `settle` ticks that are not timed."""
@@ -43,23 +57,21 @@ def measure(path: Path, ticks: int, settle: int, repeats: int, overrides=None) -
     bare, watched, inside = [], [], []
     for _ in range(repeats):
         for with_summary in (False, True):
-            with Plant(scenario) as plant:
-                master = Master(plant)
-                tally = PlantTally.for_plant(plant)
+            with Run(scenario) as run:
+                # The tally the plant's sources and sinks contribute to every Run: taken out of the run
+                # without the summary, and timed inside it with.
+                observers = run.master.observers
+                tally = next((o for o in observers if isinstance(o, PlantTally)), None)
+                if tally is not None:
+                    observers.remove(tally)
                 spent = [0.0]
-
-                def look(tick, end):
-                    started = time.perf_counter()
-                    tally.observe(tick)
-                    spent[0] += time.perf_counter() - started
-
-                progress = look if with_summary else None
-                master.run(until_tick=settle, progress=progress)
+                if with_summary:
+                    observers.append(Timed(tally or PlantTally(run.plant), spent))
+                run.run(until_tick=settle)
                 started = time.perf_counter()
                 spent[0] = 0.0
-                master.run(until_tick=settle + ticks, progress=progress)
+                run.run(until_tick=settle + ticks)
                 us = (time.perf_counter() - started) / ticks * 1e6
-                master.close()
             (watched if with_summary else bare).append(us)
             if with_summary:
                 inside.append(spent[0] / ticks * 1e6)

@@ -12,10 +12,11 @@ from hub.scenario.checker import load_scenario
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def run_scenario(path, out: Path | None = None, overrides: dict | None = None):
-    """Load, build and run a scenario; return (scenario, recorder, result)."""
+def run_scenario(path, out: Path | None = None, overrides: dict | None = None, **options):
+    """Load, build and run a scenario (`options`: those of hub.run.assembly.Run, e.g. `replay`);
+    return (scenario, recorder, result)."""
     scenario = load_scenario(path, overrides)
-    with Run(scenario, out=out) as run:
+    with Run(scenario, out=out, **options) as run:
         result = run.run()
     return scenario, run.recorder, result
 

@@ -57,6 +57,8 @@ class Commands:
         self.recorder = recorder
         self.rate = plant.scenario.run.physics_rate
         self.slots = {}    # "obj.comp.slot" → (index, Slot)
+        owners = {(c.obj, c.name): c for c in plant.components}
+        self._owner = {index: owners[(ref.obj, ref.component)] for ref, index in plant.index.items()}
         feedthrough = {(c.obj, c.name, t) for c in plant.components for t, _ in c.FEEDTHROUGH}
         self._inner = set()
         for ref, index in plant.index.items():
@@ -67,6 +69,10 @@ class Commands:
         self._inbox = Inbox()
         self._results = None
         self._forced: dict[int, object] = {}
+        # What the plant itself gave a forced slot (its flows' last write, or its own state): what
+        # `release` gives back. And the slots released at this point, to restore once.
+        self._own: dict[int, object] = {}
+        self._released: dict[int, object] = {}
         self._once: list[tuple[int, object]] = []
         self.stop_requested = False
 
@@ -147,6 +153,8 @@ class Commands:
                     self._forced[index] = command.value
                 else:
                     self._forced.pop(index, None)
+                    if index in self._own:
+                        self._released[index] = self._own.pop(index)
             self.recorder.command(tick, command.op, command.slot, command.value_text(kind), command.by)
             rows.append((tick, command.slot or "@run", command.describe(kind)))
         return rows
@@ -161,9 +169,29 @@ class Commands:
         self._results.put(wire.pack({"id": ident, "ok": error is None, "tick": tick, "error": error or ""}))
 
     def apply(self, signals, direction: Direction) -> None:
-        """Write the commanded values of this direction's slots (sources after sensing, targets after flows)."""
-        if not (self._once or self._forced):
+        """Write the commanded values of this direction's slots (sources after sensing, targets after flows).
+
+        A forced slot keeps, aside, what the plant gives it meanwhile — a flow's write to a target,
+        a component's emit of a source — and `release` hands that back: the slot then has the value
+        it would have had without the force, not the forced one (hub/bus/commands.py, README)."""
+        if not (self._once or self._forced or self._released):
             return
+        written = signals.updated if direction is Direction.TARGET else signals.active
+        for index, value in list(self._released.items()):
+            if signals.slots[index].direction is direction:
+                del self._released[index]
+                if not written[index] and signals.slots[index].type is not SlotType.VOID:
+                    signals.values[index] = value   # nothing wrote it at this point: its own value again
+                    if direction is Direction.TARGET:
+                        signals.updated[index] = True   # written back, so its component applies it
+        for index in self._forced:
+            if signals.slots[index].direction is not direction:
+                continue
+            if written[index]:
+                self._own[index] = signals.values[index]   # what the plant gave it at this point
+            elif index not in self._own:   # the force begins: what the slot or its component held
+                held = self._owner[index].held(signals.slots[index].name) if direction is Direction.TARGET else None
+                self._own[index] = signals.values[index] if held is None else held
         for index, value in [*self._forced.items(), *self._once]:
             slot = signals.slots[index]
             if slot.direction is not direction:

@@ -57,6 +57,11 @@ class Component:
     def close(self) -> None:
         """Release what the component holds (FMU instances, processes)."""
 
+    def held(self, slot: str):
+        """The value the component itself holds for the target `slot` now (a belt: whether it runs),
+        or None when the slot's value says it all. An operator's `release` gives it back."""
+        return None
+
     def events(self, tick: int) -> Iterator[tuple[int, str, str]]:
         """Event-log rows `(tick, slot, detail)` for this step: by default every active void source."""
         signals = self.signals
