@@ -57,6 +57,10 @@ class Fmu(Module):
             "participant": {"enum": ["launch", "join"],
                             "description": "serve the FMU over the bus: launch — the hub starts `planthub serve-fmu`; "
                                            "join — one started elsewhere joins (default: in the hub)"},
+            "step_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
+                             "description": "s one step may take: past it an isolated FMU's worker is killed and an "
+                                            "FMU in the hub ends the hub (a C call cannot be interrupted); either way "
+                                            "the run stops naming it, with its files complete"},
             "on_bad_value": {"enum": ["stop", "hold"], "default": "stop",
                              "description": "a non-finite real from the logic: stop the run, or hold the last good value (logged)"},
             "join_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
@@ -144,7 +148,8 @@ class Fmu(Module):
                           None, float(params["join_timeout"]), f"FMU {fmu.path.name}")
         transport = "bus" if "participant" in params else "child" if params["isolate"] else "hub"
         slave = make_slave(SlavePlan(transport, spec, fmu=fmu, variables=(tuple(v for _, v in inputs),
-                                                                           tuple(v for _, v in outputs))), world.rate)
+                                                                           tuple(v for _, v in outputs)),
+                                     step_timeout=float(params["step_timeout"])), world.rate)
         as_pairs = lambda pairs: [(s.name, s.type is SlotType.VOID) for s, _ in pairs]
         every = round(params["step"] * world.rate) if "step" in params else None
         return {"logic": LogicComponent(name, "logic", tuple(s for s, _ in ports), slave,

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -9,6 +10,7 @@ import tempfile
 from pathlib import Path
 
 from hub.core.errors import SimulationError
+from hub.core.lifetime import guarded
 
 
 class Launched:
@@ -18,12 +20,18 @@ class Launched:
     def __init__(self, name: str, command: list[str], cwd: str | None, env: dict[str, str]):
         self.name = name
         self.command = [sys.executable if i == 0 and part == "python" else part for i, part in enumerate(command)]
+        program = self.command[0]
+        if shutil.which(program, path=None if os.sep not in program else "") is None and not (
+                os.sep in program and os.access(Path(cwd or ".") / program, os.X_OK)):
+            # Checked here: the guard that starts it would only fail in the child, with a traceback.
+            raise SimulationError(f"participant {name!r}: cannot start {' '.join(command)!r}: No such file or directory")
         handle, path = tempfile.mkstemp(prefix=f"planthub-{name}-", suffix=".log")
         self.log = Path(path)
         try:
             with os.fdopen(handle, "wb") as out:
+                # guarded: the kernel kills it if the hub dies without stopping it (kill -9)
                 self.process = subprocess.Popen(
-                    self.command, cwd=cwd, env={**os.environ, **env}, stdin=subprocess.DEVNULL,
+                    guarded(self.command), cwd=cwd, env={**os.environ, **env}, stdin=subprocess.DEVNULL,
                     stdout=out, stderr=subprocess.STDOUT,
                     # Its own process group, so a Ctrl-C at the hub's terminal is the hub's to handle;
                     # but the hub's session: with autogroup scheduling (Linux) a new session would make

@@ -39,6 +39,7 @@ OPTIONS = {
         "isolate": {"type": "boolean"},
         "step": {"type": "number", "exclusiveMinimum": 0},
         "on_bad_value": {"enum": ["stop", "hold"]},
+        "step_timeout": {"type": "number", "exclusiveMinimum": 0},
     },
     "additionalProperties": False,
 }

@@ -13,6 +13,7 @@ from hub.logic.fmi import FmuInterface, FmuSlave
 from hub.logic.inprocess import InProcessSlave, make_logic
 from hub.logic.isolated import IsolatedFmu
 from hub.logic.remote import RemoteSlave
+from hub.logic.watchdog import WATCHDOG
 
 #: Where logic runs: `hub` — in the hub's process; `child` — in a child process over a pipe;
 #: `bus` — in a participant process over the Zenoh bus (launched by the hub or joining).
@@ -31,6 +32,7 @@ class SlavePlan:
     fmu: FmuInterface | None = None
     variables: tuple[tuple[str, ...], tuple[str, ...]] = ((), ())
     python: tuple[str, ...] | None = None
+    step_timeout: float = 10.0   # s one step may take (a child is killed; the hub's own process is ended)
 
 
 def make_slave(plan: SlavePlan, rate: int) -> LogicSlave:
@@ -41,9 +43,14 @@ def make_slave(plan: SlavePlan, rate: int) -> LogicSlave:
     if plan.transport == "bus":
         return RemoteSlave(spec, rate)
     if plan.fmu is not None:
-        runner = IsolatedFmu if plan.transport == "child" else FmuSlave
         inputs, outputs = plan.variables
-        return runner(plan.fmu, spec.name, list(inputs), list(outputs), dict(spec.parameters))
+        if plan.transport == "child":
+            return IsolatedFmu(plan.fmu, spec.name, list(inputs), list(outputs), dict(spec.parameters),
+                               step_timeout=plan.step_timeout)
+        slave = FmuSlave(plan.fmu, spec.name, list(inputs), list(outputs), dict(spec.parameters),
+                         step_timeout=plan.step_timeout)
+        WATCHDOG.watch(slave)   # in the hub's own process: a hang past step_timeout ends the process
+        return slave
     if plan.python is not None and plan.transport == "hub":
         module, *argv = plan.python
         with _importable(spec.cwd or "."):

@@ -5,6 +5,7 @@ import ctypes
 import itertools
 import shutil
 import tempfile
+import time
 import zipfile
 from collections import deque
 from dataclasses import dataclass
@@ -157,10 +158,12 @@ class FmuSlave:
     on_bus = False
 
     def __init__(self, interface: FmuInterface, instance: str, inputs: list[str], outputs: list[str],
-                 parameters: dict, start_time: float = 0.0):
+                 parameters: dict, start_time: float = 0.0, step_timeout: float = 10.0):
         self.interface = interface
         self.instance = instance
         self.time = start_time
+        self.step_timeout = step_timeout
+        self.busy_since = None   # time.monotonic() while inside doStep: the watchdog's clock
         self.log: deque[str] = deque(maxlen=_LOG_LINES)
         self._dir = Path(tempfile.mkdtemp(prefix="planthub-fmu-"))
         self._fmu = None
@@ -241,7 +244,11 @@ class FmuSlave:
 
     def step(self, t: float, h: float) -> None:
         self.time = t
-        self._call("doStep", self._do_step, t, h)
+        self.busy_since = time.monotonic()
+        try:
+            self._call("doStep", self._do_step, t, h)
+        finally:
+            self.busy_since = None
         self.time = t + h
 
     def _do_step_2(self, t: float, h: float) -> None:

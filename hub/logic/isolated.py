@@ -2,10 +2,18 @@
 from __future__ import annotations
 
 import multiprocessing
+import os
 import signal
 
 from hub.core.errors import SimulationError
+from hub.core.lifetime import die_with_parent
 from hub.logic.fmi import FmuInterface, FmuSlave
+
+
+#: s an isolated FMU's step may take before its worker is killed (the fmu module's `step_timeout`)
+STEP_TIMEOUT = 10.0
+#: s its worker may take to start, instantiate and initialise the FMU
+START_TIMEOUT = 30.0
 
 
 class IsolatedFmu:
@@ -20,23 +28,34 @@ class IsolatedFmu:
     on_bus = False
 
     def __init__(self, interface: FmuInterface, instance: str, inputs: list[str], outputs: list[str],
-                 parameters: dict, start_time: float = 0.0):
+                 parameters: dict, start_time: float = 0.0, step_timeout: float = STEP_TIMEOUT):
         self.interface = interface
         self.instance = instance
         self.time = start_time
+        self.step_timeout = step_timeout
         context = multiprocessing.get_context("spawn")   # no fork of a process that holds pybullet
         self._conn, child = context.Pipe()
         self._process = context.Process(
-            target=_serve, args=(child, interface, instance, inputs, outputs, parameters, start_time),
+            target=_serve, args=(child, interface, instance, inputs, outputs, parameters, start_time, os.getpid()),
             name=f"planthub-fmu-{instance}", daemon=True)
         self._process.start()
         child.close()
         self._pending = None
-        self._latest = self._ask(("outputs",))
+        # Starting includes the FMU's instantiation and initialisation: a longer limit than one step.
+        self._latest = self._ask(("outputs",), max(self.step_timeout, START_TIMEOUT))
 
-    def _ask(self, message):
+    def _ask(self, message, limit: float | None = None):
+        limit = self.step_timeout if limit is None else limit
         try:
             self._conn.send(message)
+            if not self._conn.poll(limit):   # no wait without a limit: a hung FMU is killed
+                self._process.kill()
+                self._process.join(5)
+                what = "its step" if message[0] == "step" else "its start"
+                raise SimulationError(
+                    f"FMU instance {self.instance!r} ({self.interface.path.name}) at t = {self.time:.9g} s: "
+                    f"{what} did not return within {limit:g} s (step_timeout), so its worker process was killed; "
+                    f"the run stops here, the recording so far is kept")
             kind, payload = self._conn.recv()
         except (EOFError, BrokenPipeError, ConnectionResetError):
             raise SimulationError(self._died()) from None
@@ -78,8 +97,9 @@ class IsolatedFmu:
         self._conn.close()
 
 
-def _serve(conn, interface, instance, inputs, outputs, parameters, start_time) -> None:
+def _serve(conn, interface, instance, inputs, outputs, parameters, start_time, parent) -> None:
     """The child: owns one FmuSlave and answers the parent's messages until told to close."""
+    die_with_parent(parent)   # a hub killed with SIGKILL takes its FMU workers along
     try:
         slave = FmuSlave(interface, instance, inputs, outputs, parameters, start_time)
     except SimulationError as exc:
