@@ -1,12 +1,16 @@
 """The bus side of one run: the lockstep with its participants, the data plane and live operator commands."""
 from __future__ import annotations
 
+import logging
+
 from hub.bus.commands import Commands
 from hub.bus.dataplane import DataPlane
 from hub.bus.lockstep import Lockstep
 from hub.bus.session import Bus, local_endpoint
-from hub.bus.settings import BusSettings
+from hub.bus.settings import BusSettings, exposure
 from hub.bus.wire import check_run_name
+
+_log = logging.getLogger(__name__)
 
 
 class BusLink:
@@ -39,6 +43,8 @@ class BusLink:
         run = check_run_name(plant.scenario.name)
         where = ", ".join(local_endpoint(e) for e in self.bus.endpoints) or ", ".join(settings.connect)
         self.log(f"run {run!r} on the bus ({settings.mode}, {where}): plant/{run}/**")
+        for warning in exposure(settings):
+            _log.warning("planthub: warning: %s", warning)
         # Everything that listens is declared before the hub's liveliness token, which tells others
         # the hub is there: a put made before a subscription is known goes nowhere.
         self.dataplane = DataPlane(self.bus, run, plant, settings)

@@ -2,11 +2,15 @@
 from __future__ import annotations
 
 import csv
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from hub.core.signals import Signals
 from hub.core.slots import SlotRef, SlotType
+
+#: s of wall time between two flushes of the run's files (their cost: `make bench`)
+FLUSH_PERIOD = 0.5
 
 _SUFFIXES = {SlotType.VEC3: ("x", "y", "z"), SlotType.QUAT: ("x", "y", "z", "w")}
 
@@ -53,6 +57,7 @@ class Recorder:
 
     def __post_init__(self):
         self._files = []
+        self._flush_due = 0.0
         self._rows = self._events = self._commands = self._notices = None
         if self.directory is not None:
             self.directory.mkdir(parents=True, exist_ok=True)
@@ -63,6 +68,7 @@ class Recorder:
             csv.writer(self._files[-1], quoting=csv.QUOTE_ALL, lineterminator="\n").writerow(header)
             self._events = self._open("events.csv")
             self._events.writerow(["time", "tick", "slot", "detail"])
+            self.flush()   # the headers are there from the start
 
     def _open(self, name: str):
         handle = open(self.directory / name, "w", newline="", encoding="utf-8")
@@ -70,10 +76,20 @@ class Recorder:
         return csv.writer(handle, lineterminator="\n")
 
     def observe(self, tick: int, signals: Signals, events) -> None:
-        """An observer of the run (hub/core/observer.py): the point's events, then its row."""
+        """An observer of the run (hub/core/observer.py): the point's events, then its row; the
+        files are flushed every FLUSH_PERIOD of wall time, so a hub killed outright leaves them
+        readable up to that long before the kill."""
         for t, slot, detail in events:
             self.event(t, slot, detail)
         self.sample(tick, signals)
+        now = time.monotonic()
+        if now >= self._flush_due:
+            self.flush()
+            self._flush_due = now + FLUSH_PERIOD
+
+    def flush(self) -> None:
+        for handle in self._files:
+            handle.flush()
 
     def sample(self, tick: int, signals: Signals) -> None:
         if self._rows is None:
