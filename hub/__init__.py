@@ -9,4 +9,8 @@ def __getattr__(name):
         from hub.run.simulation import Simulation
 
         return Simulation
+    if name == "__version__":
+        from importlib.metadata import version
+
+        return version("planthub")   # the installed distribution's, from pyproject.toml
     raise AttributeError(f"module 'hub' has no attribute {name!r}")

@@ -127,7 +127,7 @@ def reader(kind: SlotType):
     if kind is SlotType.REAL:
         return lambda value: value if type(value) is float else check(value)
     if kind is SlotType.INT:
-        return lambda value: value if type(value) is int else check(value)
+        return lambda value: value if type(value) is int and -2**63 <= value < 2**63 else check(value)
     if kind is SlotType.STRING:
         return lambda value: value if type(value) is str else check(value)
     return check
@@ -150,7 +150,7 @@ def from_wire(kind: SlotType, value, what: str):
         if isinstance(value, bool):
             return value
     elif kind is SlotType.INT:
-        if isinstance(value, int) and not isinstance(value, bool):
+        if isinstance(value, int) and not isinstance(value, bool) and -2**63 <= value < 2**63:
             return value
     elif kind is SlotType.REAL:
         if isinstance(value, (int, float)) and not isinstance(value, bool):

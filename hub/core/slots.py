@@ -37,9 +37,14 @@ def _to_bool(v):
     raise ValueError(f"expected true or false, got {v!r}")
 
 
+INT_RANGE = (-2**63, 2**63 - 1)   # an int slot is a 64-bit signed integer (FMI Integer64, the wire's int64)
+
+
 def _to_int(v):
     if isinstance(v, int) and not isinstance(v, bool):
-        return v
+        if INT_RANGE[0] <= v <= INT_RANGE[1]:
+            return v
+        raise ValueError(f"expected a 64-bit integer, got {v!r}")
     raise ValueError(f"expected an integer, got {v!r}")
 
 
