@@ -4,6 +4,8 @@ on, and a launched participant's name is only the launched process's. The strang
 Zenoh session in the test process, writing what schemas/wire.md describes."""
 from __future__ import annotations
 
+import subprocess
+import sys
 import threading
 import time
 
@@ -15,7 +17,7 @@ from hub.bus.session import Bus, Inbox
 from hub.bus.settings import BusSettings
 from hub.core.slots import SlotType
 
-from .bus_support import BELT_PARTICIPANT, hub, output_of, process
+from .bus_support import BELT_PARTICIPANT, hub
 from .helpers import ROOT
 
 RUN = "belt_ramp_participant"
@@ -50,31 +52,40 @@ def test_a_hello_interface_of_any_shape_gives_a_wire_error(entries):
 
 
 class Stranger:
-    """Another process on the bus: once the hub is there, says each hello and collects the welcomes."""
+    """Another process on the bus: once the hub is there, says each hello — again every 0.5 s, as a
+    participant does, until it has an answer — and collects the answers."""
 
     def __init__(self, bus: Bus, hellos: list[tuple[str, object]]):
         self.bus, self.hellos = bus, hellos
-        self.welcomes = Inbox()
+        self.answers = Inbox()
+        self.refused: dict[str, str] = {}
         for name in {n for n, _ in hellos}:
-            bus.subscribe(wire.logic_key(RUN, name, "welcome"), lambda m: self.welcomes.put(wire.unpack(m.payload)))
+            bus.subscribe(wire.logic_key(RUN, name, "welcome"),
+                          lambda m, name=name: self.answers.put((name, wire.unpack(m.payload))))
         self.hub = Inbox()
         bus.watch_tokens(wire.hub_token(RUN), lambda m: self.hub.put(m.alive))
+        self.done = threading.Event()
         self.thread = threading.Thread(target=self._say, daemon=True)
         self.thread.start()
 
     def _say(self):
         if self.hub.get(20) is not True:
             return
-        time.sleep(0.2)   # the hub's hello subscription is declared before its token
-        for name, hello in self.hellos:
-            self.bus.put(wire.logic_key(RUN, name, "hello"), msgpack.packb(hello), wire.MSGPACK)
+        deadline = time.monotonic() + 20
+        while len(self.refused) < len(self.hellos) and time.monotonic() < deadline:
+            for name, hello in self.hellos:
+                if name not in self.refused:
+                    self.bus.put(wire.logic_key(RUN, name, "hello"), msgpack.packb(hello), wire.MSGPACK)
+            until = time.monotonic() + 0.5
+            while (item := self.answers.get(until - time.monotonic())) is not None:
+                name, answer = item
+                if answer.get("id") == "stranger" and not answer.get("accepted"):
+                    self.refused.setdefault(name, answer["error"])
+        self.done.set()
 
-    def refusals(self, timeout=10.0) -> list[str]:
-        out, deadline = [], time.monotonic() + timeout
-        while len(out) < len(self.hellos) and (item := self.welcomes.get(deadline - time.monotonic())) is not None:
-            if item.get("id") == "stranger" and not item.get("accepted"):
-                out.append(item["error"])
-        return out
+    def refusals(self, timeout=25.0) -> list[str]:
+        self.done.wait(timeout)
+        return list(self.refused.values())
 
 
 def test_a_hello_that_no_decoder_takes_is_refused_and_the_run_goes_on(tmp_path):
@@ -102,10 +113,23 @@ def test_a_misfit_hello_while_the_hub_waits_for_a_joiner_does_not_abort_the_join
     with Bus(BusSettings()) as bus, Bus(BusSettings(connect=tuple(bus.endpoints)), listen=False) as other:
         stranger = Stranger(other, [("drive", misfit)])
         with hub(scene, tmp_path / "out", overrides, bus=bus) as run:
-            with process("-m", "modules.belt_drive_logic", "--run", RUN, "--name", "drive",
-                         "--connect", bus.endpoints[0]) as proc:
+            # The real participant starts only once the stranger was refused: the order is the test's.
+            joiner = threading.Thread(target=lambda: stranger.done.wait(25) and joined.append(subprocess.Popen(
+                [sys.executable, "-m", "modules.belt_drive_logic", "--run", RUN, "--name", "drive",
+                 "--connect", bus.endpoints[0]], cwd=ROOT)))
+            joined = []
+            joiner.start()
+            try:
                 result = run.run()
-                assert output_of(proc)[0] == 0
+            finally:
+                joiner.join(30)
+                for proc in joined:
+                    try:
+                        assert proc.wait(20) == 0   # it ended by itself when the run stopped
+                    finally:
+                        if proc.poll() is None:
+                            proc.kill()
+                            proc.wait()
         assert result.ticks == 150
         (refusal,) = stranger.refusals()
     assert refusal.startswith("participant 'drive' does not fit the scenario: its output 'speed' is int")

@@ -113,8 +113,12 @@ def test_a_participant_whose_step_raises_stops_the_run_with_its_error(write_scen
         """)
     with pytest.raises(SimulationError) as info:
         run_scenario(path)
-    assert str(info.value) == ("participant 'drive' failed in step 10: ZeroDivisionError: asked to fail at "
-                               "t = 0.5 s (at t = 0.55 s); the run stops here, the recording so far is kept")
+    first, *trace = str(info.value).splitlines()
+    assert first == ("participant 'drive' failed in step 10: ZeroDivisionError: asked to fail at "
+                     "t = 0.5 s (at t = 0.55 s); the run stops here, the recording so far is kept")
+    assert trace[0] == "  its traceback:" and "belt_drives.py" in "\n".join(trace)   # where it failed
+    assert trace[-1].strip() == 'raise ZeroDivisionError(f"asked to fail at t = {t:g} s")'
+
 
 
 def test_an_output_of_the_wrong_type_is_named(write_scenario):

@@ -103,7 +103,7 @@ def test_a_scene_without_sinks_and_sources_keeps_the_plain_summary(tmp_path):
     stdout, summary = planthub_run(ROOT / "scenarios" / "belt_bottle_sensor.yaml", tmp_path)
     assert "plant" not in summary   # a scene that is no plant has no plant section
     starts = [line.split()[0] for line in stdout.splitlines() if line.startswith("  ") and not line.startswith("    ")]
-    assert starts == ["simulated", "wall", "events", "recording", "event", "summary"]
+    assert starts == ["ended", "simulated", "wall", "events", "recording", "event", "summary"]
 
 
 def test_the_python_api_writes_summary_json_when_closed(tmp_path):

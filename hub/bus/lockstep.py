@@ -263,7 +263,10 @@ class Lockstep:
                     peer.result_n = n
                     return
             if isinstance(message, dict) and "error" in message:
-                self._fail(peer, f"failed in step {message.get('step')}: {message['error']}")
+                trace = message.get("traceback")
+                where = ("\n  its traceback:\n" + "\n".join(f"    {line}" for line in trace[-4000:].rstrip().splitlines())
+                         if isinstance(trace, str) and trace else "")
+                self._fail(peer, f"failed in step {message.get('step')}: {str(message['error'])[:2000]}", where)
             if not (isinstance(message, list) and len(message) == 2 and isinstance(message[0], int)
                     and isinstance(message[1], list)):
                 raise wire.WireError(f"expected [n, outputs], got {message!r}")
@@ -371,10 +374,10 @@ class Lockstep:
     def _where(self) -> str:
         return f"at t = {self.tick / self.rate:.9g} s"
 
-    def _fail(self, peer: _Peer, reason: str) -> None:
+    def _fail(self, peer: _Peer, reason: str, detail: str = "") -> None:
         spec = peer.slave.spec
         raise SimulationError(f"{spec.label} {reason} ({self._where()}); "
-                              f"the run stops here, the recording so far is kept")
+                              f"the run stops here, the recording so far is kept{detail}")
 
     def _lost(self, peer: _Peer, reason: str) -> None:
         peer.lost = True

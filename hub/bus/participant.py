@@ -260,7 +260,7 @@ class _Link:
                                     f"within {grace:g} s")
             return None
         kind, value = item
-        if kind == "state" and wire.unpack(value).get("state") == "stopped":
+        if kind == "state" and _map(value).get("state") == "stopped":
             return "stopped"
         if kind == "hub":
             self.hub_alive = value
@@ -296,13 +296,13 @@ class _Link:
             if kind == "hub":
                 self.hub_alive, sent_at = value, None
             elif kind == "welcome":
-                welcome = wire.unpack(value)
+                welcome = _map(value)
                 if welcome.get("id") != self.id:
                     continue   # meant for another process under this name
                 if not welcome.get("accepted"):
                     raise PlanthubError(f"the hub refused me: {welcome.get('error')}")
                 break
-            elif kind == "state" and wire.unpack(value).get("state") == "stopped":
+            elif kind == "state" and _map(value).get("state") == "stopped":
                 raise PlanthubError(f"the run stopped before I could {'re' if self.last else ''}join")
         if self.last is None:
             self.logic.begin(dict(welcome.get("parameters") or {}), float(welcome.get("time", 0.0)))
@@ -319,8 +319,18 @@ class _Link:
             outputs = self.logic.advance(t, h, values)
         except Exception as exc:
             detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
-            self.output.put(wire.error_message(n, detail))
+            self.output.put(wire.error_message(n, detail, "".join(traceback.format_tb(exc.__traceback__))))
             raise PlanthubError(f"step {n} failed: {detail}") from exc
         message = wire.output_message(n, outputs)
         self.last = (n, message)
         self.output.put(message)
+
+
+def _map(payload: bytes) -> dict:
+    """A control message that should be a map; anything else (not msgpack, not a map) counts as an
+    empty one: a stranger's junk on our keys must not end the participant."""
+    try:
+        message = wire.unpack(payload)
+    except wire.WireError:
+        return {}
+    return message if isinstance(message, dict) else {}

@@ -1,4 +1,4 @@
-"""The Zenoh session: every Zenoh call planthub makes goes through this file.
+"""The Zenoh session: every Zenoh call planthub makes goes through this file (but setting up Zenoh's log: hub/bus/log.py).
 
 Received samples reach the caller through callbacks that only append to an `Inbox`; the main
 thread waits on that queue (which releases the GIL), never inside Zenoh. A callback that did real
@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import zenoh
 
+from hub.bus import log as zenoh_log
 from hub.core.errors import PlanthubError
 from hub.bus.settings import BusSettings
 from hub.bus.tls import TlsSettings
@@ -161,6 +162,7 @@ class Bus:
                 _configure_tls(config, tls)
             if settings.control is not None:
                 _configure_access(config, settings.control, tls)
+            zenoh_log.start()
             self._session = zenoh.open(config)
         except zenoh.ZError as exc:
             where = ", ".join([f"listen on {e}" for e in listen_on] + [f"connect to {e}" for e in settings.connect])

@@ -210,6 +210,6 @@ def output_message(n: int, outputs: list) -> bytes:
     return _hot.pack([n, outputs])
 
 
-def error_message(n: int, error: str) -> bytes:
-    """Participant → hub, instead of outputs: step `n` failed."""
-    return pack({"step": n, "error": error})
+def error_message(n: int, error: str, trace: str = "") -> bytes:
+    """Participant → hub, instead of outputs: step `n` failed (`error` one line, `trace` where)."""
+    return pack({"step": n, "error": error, **({"traceback": trace} if trace else {})})

@@ -1,8 +1,7 @@
-"""The command line's bus side: run options (bus, pacing, replay), `serve-fmu` and `send`."""
+"""The command line's bus side: the hub's bus settings from the run options, `serve-fmu` and `send`."""
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 import uuid
 from dataclasses import replace
@@ -13,39 +12,44 @@ from hub.bus.settings import BusSettings
 from hub.scenario.checker import Scenario
 
 
-def add_run_options(run: argparse.ArgumentParser) -> None:
-    run.add_argument("--realtime", nargs="?", type=float, const=1.0, metavar="FACTOR",
-                     help="pace the run to the wall clock (FACTOR× real time, default 1) and report overruns")
-    run.add_argument("--replay", type=Path, metavar="RUN_DIR",
-                     help="apply the operator commands recorded in RUN_DIR/commands.csv at their ticks")
-    bus = run.add_argument_group("bus (any of these opens it; they override the scenario's run.bus)")
-    bus.add_argument("--bus", action="store_true", help="open the bus even if the scenario has no run.bus")
-    bus.add_argument("--listen", action="append", metavar="ENDPOINT", help="listen on, e.g. tcp/0.0.0.0:7447")
-    bus.add_argument("--connect", action="append", metavar="ENDPOINT", help="connect to, e.g. tcp/10.0.0.2:7447")
-    bus.add_argument("--mode", choices=["peer", "client", "router"], help="the hub's Zenoh mode")
-
-
-def add_commands(sub) -> dict:
-    """The bus subcommands; returns name → handler."""
+def add_commands(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str = "") -> dict:
+    """The bus subcommands (each with `parents`' options and `epilog` after its example); returns
+    name → handler."""
     from hub.bus.participant import add_options, add_tls_options
 
-    serve = sub.add_parser("serve-fmu", help="serve an FMU to a running plant over the bus (a lockstep participant)")
-    serve.add_argument("fmu", type=Path)
+    serve = sub.add_parser(
+        "serve-fmu", parents=parents, formatter_class=formatter,
+        help="serve an FMU to a running plant over the bus (a lockstep participant)",
+        description="Serve an FMU to a running plant over the bus: a lockstep participant for an `fmu` object "
+                    "with `participant: join` (or one the hub launches).",
+        epilog="example:\n  planthub serve-fmu build/fmus/belt_drive-fmi2.fmu --run belt_ramp_fmu --name drive "
+               "\\\n      --connect tcp/192.168.1.5:7447 --event run --map speed=belt_speed\n\n" + epilog)
+    serve.add_argument("fmu", type=Path, help="the FMU file (FMI 2.0 or 3.0, co-simulation)")
     serve.add_argument("--event", action="append", default=[], metavar="VARIABLE",
                        help="a Boolean variable that is a void slot (the object's `events`)")
     serve.add_argument("--map", action="append", default=[], metavar="VARIABLE=SLOT",
                        help="a variable's slot name (the object's `map`)")
     add_options(serve)
+    serve.set_defaults(command_parser=serve)
 
-    send = sub.add_parser("send", help="send an operator command to a running plant")
-    send.add_argument("run", help="the run's name")
-    send.add_argument("op", choices=["set", "force", "release", "stop"])
-    send.add_argument("slot", nargs="?", default="", help="object.component.slot")
-    send.add_argument("value", nargs="?", help="the value, read as YAML (0.2, true, [0, 0, 1])")
+    send = sub.add_parser(
+        "send", parents=parents, formatter_class=formatter,
+        help="send an operator command to a running plant",
+        description="Send an operator command to a running plant and wait for the hub's answer (the tick it "
+                    "applied it at).",
+        epilog="example:\n  planthub send belt_ramp_participant force belt.drive.speed 0.2 --connect tcp/127.0.0.1:7447 "
+               "--by alice\n\n" + epilog)
+    send.add_argument("run", help="the run's name (the scenario's name)")
+    send.add_argument("op", choices=["set", "force", "release", "stop"],
+                      help="set: the slot takes the value at the next point; force: at every point until release; "
+                           "stop: the run ends after the next point")
+    send.add_argument("slot", nargs="?", default="", help="object.component.slot (not for stop)")
+    send.add_argument("value", nargs="?", help="the value, read as YAML (0.2, true, [0, 0, 1]); for set and force")
     send.add_argument("--connect", action="append", required=True, metavar="ENDPOINT", help="the hub's endpoint")
     send.add_argument("--by", default="", help="who sends it (logged with the command)")
     send.add_argument("--timeout", type=float, default=5.0, help="s to wait for the hub's answer")
     add_tls_options(send)
+    send.set_defaults(command_parser=send)
     return {"serve-fmu": lambda args: _serve_fmu(serve, args), "send": lambda args: _send(send, args)}
 
 
@@ -66,7 +70,6 @@ def bus_settings(args, scenario: Scenario) -> BusSettings | None:
 
 
 def _serve_fmu(parser, args) -> int:
-    from hub.logic.fmi import FmuError
     from hub.logic.served import FmuParticipant
     from hub.bus.participant import check_options, serve
 
@@ -77,11 +80,7 @@ def _serve_fmu(parser, args) -> int:
         if not sep:
             parser.error(f"--map expects VARIABLE=SLOT, got {item!r}")
         rename[variable] = slot
-    try:
-        logic = FmuParticipant(str(args.fmu), args.event, rename, instance=args.name)
-    except FmuError as exc:
-        print(f"planthub: {exc}", file=sys.stderr)
-        return 1
+    logic = FmuParticipant(str(args.fmu), args.event, rename, instance=args.name)   # an FmuError: exit 1
     return serve(logic, args=args)
 
 

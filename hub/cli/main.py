@@ -1,68 +1,145 @@
-"""Command line: `python -m hub run|validate|describe`."""
+"""Command line: `planthub run|validate|test|describe|check-fmu|report|serve-fmu|send` (also `python -m hub`)."""
 from __future__ import annotations
 
 import argparse
+import logging
+import os
 import sys
 import time
 from pathlib import Path
 
-import yaml
+from hub.cli.bus import add_commands as add_bus_commands
+from hub.cli.describe import describe
+from hub.cli.exits import BAD_SCENARIO, FAILED, INTERRUPTED, OK, TABLE, USAGE, UsageError
+from hub.cli.logs import diagnostics
+from hub.cli.options import add_run_arguments, add_set, overrides, verbosity, verbosity_parent
+from hub.cli.running import run_command, test_command
+from hub.core.errors import PlanthubError, ScenarioError
 
-from hub.cli.bus import add_commands as add_bus_commands, add_run_options, bus_settings
-from hub.core.errors import PlanthubError, Problem, ScenarioError
-from hub.core.registry import UnknownModule, default_registry
-from hub.scenario.checker import Scenario, load_scenario
+_log = logging.getLogger(__name__)
+_FORMAT = argparse.RawDescriptionHelpFormatter   # the examples and the exit-code table keep their lines
+
+DESCRIPTION = """\
+planthub: a co-simulation hub for automation plants. A scenario (YAML) names the plant's
+objects — belts, bottles, sensors, actuators, sources, sinks, logic in FMUs or participant
+processes — and the flows between their slots; the hub steps the physics and the logic
+together and writes what happened."""
+
+NOTES = """\
+examples:
+  planthub run scenarios/stop_at_barrier.yaml
+  planthub test scenarios/switch_logic.yaml --junit reports/switch.xml
+  planthub describe source
+
+Every command takes -v (more detail; the run summary's table lists the logic's events too)
+and -q (only errors and what the command prints). Zenoh's own log goes to stderr with -vv
+(info) or -vvv (debug), or as RUST_LOG says in Zenoh's filter syntax (RUST_LOG=zenoh=debug);
+a participant the hub launches logs into its captured output.
+
+""" + TABLE
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="planthub", description="Co-simulation hub for automation plants.")
-    sub = parser.add_subparsers(dest="command", required=True)
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
 
-    run = sub.add_parser("run", help="run a scenario headless and record it")
-    run.add_argument("scenario", type=Path)
-    run.add_argument("--out", type=Path, help="folder for recording.csv and events.csv (default: runs/<name>)")
-    _add_set(run)
-    add_run_options(run)
+    try:
+        return version("planthub")   # the installed distribution's, from pyproject.toml
+    except PackageNotFoundError:
+        return "(not installed: run it from an installed environment for its version)"
 
-    check = sub.add_parser("validate", help="check a scenario without running it")
-    check.add_argument("scenario", type=Path)
-    _add_set(check)
 
-    test = sub.add_parser("test", help="run a scenario and judge its expectations (exit 1 if one fails)")
-    test.add_argument("scenario", type=Path)
-    test.add_argument("--junit", type=Path, metavar="FILE", help="also write the outcomes as JUnit XML")
-    test.add_argument("--out", type=Path, help="also write recording.csv and events.csv here")
-    _add_set(test)
+def parser() -> tuple[argparse.ArgumentParser, dict]:
+    """The command line's parser and its handlers, name → function(args) → exit code."""
+    top = argparse.ArgumentParser(prog="planthub", description=DESCRIPTION, epilog=NOTES, formatter_class=_FORMAT)
+    top.add_argument("--version", action="version", version=f"planthub {_version()}")
+    sub = top.add_subparsers(dest="command", required=True, metavar="COMMAND",
+                             title="commands (planthub COMMAND --help: its options and an example)")
+    loud = [verbosity_parent()]
 
-    describe = sub.add_parser("describe", help="list a module's parameters and slots (no name: list modules)")
-    describe.add_argument("module", nargs="?")
+    def command(name: str, help: str, example: str, description: str = ""):
+        made = sub.add_parser(name, help=help, description=description or help[0].upper() + help[1:] + ".",
+                              epilog=f"example:\n  {example}\n\n{TABLE}", parents=loud, formatter_class=_FORMAT)
+        made.set_defaults(command_parser=made)
+        return made
 
-    check_fmu = sub.add_parser("check-fmu", help="check an FMU before a run: version, slots, validation")
-    check_fmu.add_argument("fmu", type=Path)
+    run = command("run", "run a scenario headless: print its summary, write its recording and event log",
+                  "planthub run scenarios/stop_at_barrier.yaml --set run.duration=3 --out runs/short",
+                  "Run a scenario headless. Prints the run summary — how the run ended, the plant's\n"
+                  "figures, time, events — and writes recording.csv, events.csv and summary.json.")
+    add_run_arguments(run, "folder for recording.csv, events.csv and summary.json (default: runs/<name>)")
+
+    check = command("validate", "check a scenario without running it",
+                    "planthub validate my_plant.yaml --set run.physics_rate=1000")
+    check.add_argument("scenario", type=Path, help="the scenario file (YAML)")
+    add_set(check)
+
+    test = command("test", "run a scenario and judge its expectations (`expect:`); exit 1 if one fails",
+                   "planthub test scenarios/switch_logic.yaml --junit reports/switch.xml \\\n"
+                   "      --set 'objects.sw.logic={file: my_switch_logic.fmu}'",
+                   "Run a scenario and judge its expectations (`expect:`): a line per expectation, then\n"
+                   "N passed, M failed. Takes every option of `run`; writes files only with --out.")
+    add_run_arguments(test, "also write recording.csv, events.csv and summary.json here (default: nothing written)")
+    test.add_argument("--junit", type=Path, metavar="FILE",
+                      help="also write the outcomes as JUnit XML (a case per expectation; seed, --set and the "
+                           "summary inside)")
+
+    describe_ = command("describe", "list the modules, or one module's parameters (form, example) and slots",
+                        "planthub describe source")
+    describe_.add_argument("module", nargs="?", help="a module's name (conveyor, source, …); without: list them all")
+
+    check_fmu = command("check-fmu", "check an FMU before a run: version, slots, fmpy's validation",
+                        "planthub check-fmu my_switch.fmu --like build/fmus/track_switch-fmi2.fmu")
+    check_fmu.add_argument("fmu", type=Path, help="the FMU file to check")
     check_fmu.add_argument("--like", type=Path, metavar="REFERENCE.fmu",
                            help="also check it can replace this FMU (same inputs and outputs)")
 
-    report = sub.add_parser("report", help="run a set of scenarios and write a markdown report with plots")
+    report = command("report", "run a set of scenarios and write a markdown report with plots",
+                     "planthub report paper --out runs/report_paper")
     report.add_argument("name", choices=["paper"], help="paper: the paper's three plausibility tests")
-    report.add_argument("--out", type=Path, help="folder for report.md, its plots and runs (default: runs/report_<name>)")
+    report.add_argument("--out", type=Path, metavar="DIR",
+                        help="folder for report.md, its plots and runs (default: runs/report_<name>)")
     report.add_argument("--no-plots", action="store_true", help="write the numbers only (no matplotlib needed)")
 
-    bus_commands = add_bus_commands(sub)
+    handlers = {"run": run_command, "validate": _validate, "test": test_command,
+                "describe": lambda args: describe(args.module), "check-fmu": _check_fmu, "report": _report,
+                **add_bus_commands(sub, parents=loud, formatter=_FORMAT, epilog=TABLE)}
+    return top, handlers
 
-    args = parser.parse_args(argv)
-    try:
-        commands = {"run": _run, "validate": _validate, "describe": _describe, "check-fmu": _check_fmu, "test": _test,
-                    "report": _report, **bus_commands}
-        return commands[args.command](args)
-    except ScenarioError as exc:
-        print(f"planthub: {exc}", file=sys.stderr)
-        return 2
-    except PlanthubError as exc:
-        print(f"planthub: {exc}", file=sys.stderr)
-        return 1
-    except BrokenPipeError:   # output piped into `head` and the like
-        sys.stderr.close()
-        return 0
+
+def main(argv=None) -> int:
+    top, handlers = parser()
+    args, unknown = top.parse_known_args(argv)   # a usage error exits here, with code 2 (USAGE)
+    if unknown:   # told by the subcommand, with its usage, not by `planthub` with the list of commands
+        getattr(args, "command_parser", top).error(f"unrecognized arguments: {' '.join(unknown)}")
+    with diagnostics(verbosity(args)):
+        try:
+            return handlers[args.command](args)
+        except UsageError as exc:
+            _log.error(str(exc))
+            return USAGE
+        except ScenarioError as exc:
+            _log.error(str(exc))
+            return BAD_SCENARIO
+        except PlanthubError as exc:
+            _log.error(str(exc))
+            return FAILED
+        except KeyboardInterrupt:
+            _log.error("interrupted (Ctrl-C)")
+            return INTERRUPTED
+        except BrokenPipeError:   # output piped into `head` and the like: the reader has what it wanted
+            # Python's own advice: point stdout at /dev/null, so the flush at exit does not fail again.
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return OK
+
+
+def _validate(args) -> int:
+    from hub.scenario.checker import load_scenario
+
+    scenario = load_scenario(args.scenario, overrides(args))
+    run = scenario.run
+    print(f"{args.scenario}: ok — {len(scenario.objects)} objects, {len(scenario.flows)} flows, "
+          f"{len(scenario.record)} recorded slots, {run.end_tick / run.physics_rate:g} s at {run.physics_rate} Hz")
+    return OK
 
 
 def _report(args) -> int:
@@ -75,133 +152,16 @@ def _report(args) -> int:
     started = time.monotonic()
     path = getattr(import_module(module), function)(
         out, plots=not args.no_plots,
-        progress=lambda step: print(f"  {time.monotonic() - started:6.1f} s  {step}", file=sys.stderr))
+        progress=lambda step: _log.info(f"{time.monotonic() - started:6.1f} s  {step}"))
     print(f"planthub report {args.name}: {path}")
-    return 0
-
-
-def _add_set(parser) -> None:
-    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-                        help="override a scenario value, e.g. --set run.physics_rate=1000 (value read as YAML)")
-
-
-def _overrides(args) -> dict:
-    out = {}
-    for item in args.overrides:
-        key, sep, value = item.partition("=")
-        if not sep or not key:
-            raise ScenarioError([Problem("--set", None, "", f"expected KEY=VALUE, got {item!r}")])
-        out[key] = yaml.safe_load(value)
-    return out
-
-
-def _load(args) -> Scenario:
-    return load_scenario(args.scenario, _overrides(args))
-
-
-def _validate(args) -> int:
-    scenario = _load(args)
-    run = scenario.run
-    print(f"{args.scenario}: ok — {len(scenario.objects)} objects, {len(scenario.flows)} flows, "
-          f"{len(scenario.record)} recorded slots, {run.end_tick / run.physics_rate:g} s at {run.physics_rate} Hz")
-    return 0
-
-
-def _run(args) -> int:
-    from hub.bus.session import Bus
-    from hub.run.assembly import Run
-    from hub.run.pacing import Pacer
-
-    scenario = _load(args)
-    out = args.out or Path("runs") / (scenario.name + ("_replay" if args.replay else ""))
-    if args.replay and out.resolve() == args.replay.resolve():
-        raise PlanthubError(f"--out {out} is the run being replayed; write the replay elsewhere")
-    if args.realtime is not None and not args.realtime > 0:
-        raise PlanthubError(f"--realtime needs a positive factor, got {args.realtime:g}")
-    settings = bus_settings(args, scenario)
-    bus = Bus(settings) if settings is not None else None
-    notice = lambda text: print(f"planthub: {text}", file=sys.stderr)
-    pacer = Pacer(scenario.run.physics_rate, args.realtime) if args.realtime else None
-    progress = [_Progress(scenario.run.end_tick)] if sys.stderr.isatty() else []
-    try:
-        with Run(scenario, out=out, bus=bus, replay=args.replay, pacer=pacer, observers=progress, log=notice) as run:
-            result = run.run()
-            run.close("the run reached its end" if not result.stopped_by else result.stopped_by)
-            summary = run.summary()
-            link = run.link
-    finally:
-        if bus is not None:
-            bus.close()
-    print("\n".join(summary.lines()))
-    if result.stopped_by:
-        print(f"  {'ended' if result.ended else 'stopped':<12} {result.stopped_by}")
-    if pacer is not None:
-        print(f"  pacing       {pacer.summary()}")
-    if link is not None:
-        count = len(link.lockstep.peers)
-        print(f"  bus          {count} participant{'s' if count != 1 else ''}, "
-              f"{link.dataplane.samples} data-plane samples")
-    if (out / "commands.csv").is_file():
-        print(f"  commands     {out / 'commands.csv'}")
-    return 0
-
-
-class _Progress:
-    """A one-line progress display on a terminal, redrawn at most twice a second: an observer."""
-
-    def __init__(self, end: int):
-        self.end = end
-        self.shown = self.started = time.monotonic()
-
-    def close(self, reason: str) -> None:
-        """The line ends with the run."""
-
-    def observe(self, tick: int, signals, events) -> None:
-        end = self.end
-        now = time.monotonic()
-        if now - self.shown >= 0.5 or tick >= end:
-            self.shown = now
-            print(f"\r  {100 * tick / end:5.1f} %  {now - self.started:6.1f} s wall", end="", file=sys.stderr)
-            if tick >= end:
-                print(file=sys.stderr)
-
-
-def _describe(args) -> int:
-    registry = default_registry()
-    if not args.module:
-        for name in registry.names():
-            doc = (registry.get(name).__doc__ or "").strip().splitlines()
-            print(f"{name:<16} {doc[0] if doc else ''}")
-        return 0
-    try:
-        module = registry.get(args.module)
-    except UnknownModule as exc:
-        print(f"planthub: {exc}", file=sys.stderr)
-        return 2
-    print(f"{args.module}: {(sys.modules[module.__module__].__doc__ or module.__doc__ or '').strip()}")
-    print("\nparameters:")
-    props = module.PARAMETERS.get("properties", {})
-    required = set(module.PARAMETERS.get("required", []))
-    for name, schema in props.items():
-        default = "required" if name in required else f"default {schema['default']!r}" if "default" in schema else "optional"
-        print(f"  {name:<14} {default:<18} {schema.get('description', '')}")
-    slots = [(comp, slot) for comp, group in module.slots(module.with_defaults({})).items() for slot in group]
-    if slots:
-        print("\nslots:")
-    for comp, slot in slots:
-        print(f"  {comp + '.' + slot.name:<22} {slot.type.value:<7} {slot.direction.value:<7} {slot.doc}")
-    return 0
+    return OK
 
 
 def _check_fmu(args) -> int:
-    from hub.logic.fmi import FmuError, compare, inspect_fmu, validate
+    from hub.logic.fmi import compare, inspect_fmu, validate
 
-    try:
-        fmu = inspect_fmu(args.fmu)
-        reference = inspect_fmu(args.like) if args.like else None
-    except FmuError as exc:
-        print(f"planthub: {exc}", file=sys.stderr)
-        return 1
+    fmu = inspect_fmu(args.fmu)   # an FmuError (no such file, no FMU): exit 1
+    reference = inspect_fmu(args.like) if args.like else None
     print(f"{args.fmu}: FMI {fmu.fmi_version} co-simulation, model {fmu.model_name!r}")
     for causality, label in (("input", "target slots"), ("output", "source slots"), ("parameter", "parameters")):
         names = ", ".join(f"{v.name} ({v.type.value})" for v in fmu.of(causality)) or "none"
@@ -214,26 +174,4 @@ def _check_fmu(args) -> int:
     if not problems:
         fits = f"; fits in place of {args.like}" if reference is not None else ""
         print(f"  ✓ passes fmpy's validation{fits}")
-    return 1 if problems else 0
-
-
-def _test(args) -> int:
-    from hub.run.junit import write_junit
-    from hub.run.simulation import Simulation
-
-    started = time.perf_counter()
-    with Simulation(args.scenario, _overrides(args), out=args.out) as sim:
-        if not sim.scenario.expect:
-            print(f"planthub: {args.scenario} has no `expect:` entries to judge", file=sys.stderr)
-            return 2
-        sim.run()
-        outcomes = sim.check()
-    seconds = time.perf_counter() - started
-    print(f"planthub test {sim.scenario.name}  ({args.scenario}, {sim.time:g} s simulated)")
-    for outcome in outcomes:
-        print(f"  {'✓' if outcome.passed else '✗'} {outcome.expectation.name} — {outcome.message}")
-    failed = sum(not o.passed for o in outcomes)
-    print(f"{len(outcomes) - failed} passed, {failed} failed")
-    if args.junit:
-        write_junit(args.junit, sim.scenario.name, outcomes, seconds)
-    return 1 if failed else 0
+    return FAILED if problems else OK

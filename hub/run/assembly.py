@@ -1,15 +1,20 @@
 """The one place a run is put together — scenario, plant, recorder, bus side, contributed figures, master — for the CLI, the Python API, reports, tests and benchmarks."""
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
+from hub.core.errors import SimulationError
 from hub.core.observer import Observer, StopCondition
 from hub.core.registry import load_entry
+from hub.logic.watchdog import WATCHDOG
 from hub.run.bus_link import BusLink
+from hub.run.interruption import Interruption
+from hub.run.ending import ending
 from hub.run.master import Master, RunResult
 from hub.run.plant import Plant
 from hub.run.recorder import Recorder
-from hub.run.summary import RunSummary
+from hub.run.summary import RunSummary, logic_components
 from hub.scenario.checker import Scenario
 
 
@@ -31,16 +36,20 @@ class Run:
       API reads any slot at any time).
     - `observers`, `stops`: more observers and stop conditions (hub/core/observer.py), after
       the recorder, the bus side and what the scenario's modules contribute.
-    - `log`: a function for notices (a participant lost, where the bus listens).
+    - `signals`: SIGINT and SIGTERM end the run at the next point (hub/run/interruption.py; the
+      CLI's runs), their status in `interruption.exit_status`.
+    - `log`: a function for notices (a participant lost, where the bus listens); default: the
+      `hub.run` logger at INFO (the CLI shows them unless `-q`).
     """
 
     def __init__(self, scenario: Scenario, *, out: Path | None = None, bus=None, replay=None, pacer=None,
                  every_source: bool = False, observers: list[Observer] = (), stops: list[StopCondition] = (),
-                 log=None):
+                 log=None, signals: bool = False):
         self.scenario = scenario
         self.out = Path(out) if out is not None else None
-        self.log = log or (lambda text: None)
+        self.log = log or logging.getLogger(__name__).info
         self.link = None
+        self.failure = None       # what ended the run with an error (the `with` block's exception)
         self.wall_seconds = 0.0   # spent in run (and in Simulation.run_until)
         self._started = self._closed = False
         self.plant = Plant(scenario, every_source=every_source)
@@ -49,6 +58,10 @@ class Run:
             rate = scenario.run.physics_rate
             columns = [(ref, kind, plant.index[ref]) for ref, kind in scenario.record]
             self.recorder = Recorder(columns, rate, self.out)
+            self._hang = WATCHDOG.on_hang(self._emergency)
+            self.interruption = Interruption(rate, self._emergency).install() if signals else None
+            if self.interruption is not None:
+                stops = [self.interruption, *stops]
             # Imported here: replaying needs the bus package's command parser, not a bus.
             from hub.bus.commands import Commands, load_commands
             commands = Commands(plant, self.recorder, load_commands(replay, plant)) if replay is not None else None
@@ -120,7 +133,10 @@ class Run:
         run = self.scenario.run
         return RunSummary(self.scenario.name, self.scenario.path, self.master.tick, run.physics_rate, run.substeps,
                           self.wall_seconds, self.recorder.stats, len(self.scenario.record), self.out,
-                          tuple(f.section() for f in self.figures))
+                          tuple(f.section() for f in self.figures),
+                          ending(self.master.stopped, self.master.tick, run.end_tick, run.physics_rate,
+                                 closed=self._closed, failure=self.failure),
+                          logic_components(self.plant.components))
 
     def close(self, reason: str = "closed") -> None:
         """End the run (participants told, files closed), write summary.json when there is a folder,
@@ -135,7 +151,22 @@ class Run:
         finally:
             self._close_parts(reason)
 
+    def _emergency(self, message: str) -> None:
+        """The process is about to end from another thread (an FMU in the hub's process hangs, a
+        signal found the run stuck): the recording and event log are closed complete, summary.json
+        says why. The stuck main thread is inside a call and touches neither."""
+        self.failure = SimulationError(message)
+        self.recorder.close(message)
+        if self.out is not None:
+            self.summary().write(self.out / "summary.json")
+        for peer in (self.link.lockstep.peers.values() if self.link and self.link.lockstep else ()):
+            if peer.process is not None:
+                peer.process.log.unlink(missing_ok=True)   # the kernel kills the process itself (die_with_parent)
+
     def _close_parts(self, reason: str) -> None:
+        WATCHDOG.forget(getattr(self, "_hang", None))
+        if getattr(self, "interruption", None) is not None:
+            self.interruption.close(reason)
         try:
             for part in (getattr(self, "link", None), getattr(self, "recorder", None)):
                 if part is not None:
@@ -147,6 +178,7 @@ class Run:
         return self
 
     def __exit__(self, *exc):
+        self.failure = exc[1]
         self.close("the run failed" if exc[0] is not None else "closed")
 
 

@@ -1,22 +1,42 @@
-"""JUnit XML for CI systems: one test case per expectation of a scenario."""
+"""JUnit XML for CI systems: one test case per expectation of a scenario, judged on one run."""
 from __future__ import annotations
 
+from datetime import datetime
 from pathlib import Path
 from xml.etree import ElementTree
 
 from hub.scenario.expectations import Outcome
 
 
-def write_junit(path: Path, suite: str, outcomes: list[Outcome], seconds: float) -> None:
+def write_junit(path: Path, suite: str, outcomes: list[Outcome], seconds: float, *, timestamp: datetime,
+                hostname: str = "", properties: list[tuple[str, str]] = (), output: str = "",
+                error: str | None = None) -> None:
+    """One <testsuite> for the run: `timestamp` when it started, `seconds` of wall time,
+    `properties` (scenario, seed, each --set, how it ended) and the run's printed summary as
+    <system-out>. Every case was judged on the one run, so each gets an even share of its time:
+    CI systems add the cases' times up, and they add up to the run's. `error`: the run failed
+    before anything could be judged — one case, "the run", in error."""
     failures = sum(not o.passed for o in outcomes)
-    root = ElementTree.Element("testsuites", tests=str(len(outcomes)), failures=str(failures))
-    node = ElementTree.SubElement(root, "testsuite", name=suite, tests=str(len(outcomes)),
-                                  failures=str(failures), errors="0", time=f"{seconds:.3f}")
+    tests, errors = (len(outcomes), 0) if error is None else (1, 1)
+    root = ElementTree.Element("testsuites", tests=str(tests), failures=str(failures), errors=str(errors),
+                               time=f"{seconds:.3f}")
+    node = ElementTree.SubElement(root, "testsuite", name=suite, tests=str(tests), failures=str(failures),
+                                  errors=str(errors), skipped="0", time=f"{seconds:.3f}",
+                                  timestamp=timestamp.isoformat(timespec="seconds"), hostname=hostname or "localhost")
+    if properties:
+        props = ElementTree.SubElement(node, "properties")
+        for name, value in properties:
+            ElementTree.SubElement(props, "property", name=name, value=value)
+    share = f"{seconds / tests:.3f}"
     for outcome in outcomes:
-        case = ElementTree.SubElement(node, "testcase", classname=suite, name=outcome.expectation.name)
+        case = ElementTree.SubElement(node, "testcase", classname=suite, name=outcome.expectation.name, time=share)
         if not outcome.passed:
             failure = ElementTree.SubElement(case, "failure", message=outcome.message)
             failure.text = f"expected {outcome.expectation.describe()}: {outcome.message}"
+    if error is not None:
+        case = ElementTree.SubElement(node, "testcase", classname=suite, name="the run", time=share)
+        ElementTree.SubElement(case, "error", message=error.splitlines()[0] if error else "").text = error
+    ElementTree.SubElement(node, "system-out").text = output
     ElementTree.indent(root)
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     ElementTree.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)

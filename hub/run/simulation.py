@@ -131,6 +131,7 @@ class Simulation:
         return self
 
     def __exit__(self, *exc):
+        self._run.failure = exc[1]   # summary.json says the run failed, and how
         self._run.close("the run failed" if exc[0] is not None else "closed")
 
 

@@ -6,6 +6,17 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from hub.core.observer import SummarySection
+from hub.logic.component import LogicComponent
+from hub.run.ending import Ending
+
+
+def logic_components(components) -> frozenset[str]:
+    """`object.component` of every component that is logic, not plant: a LogicComponent (an FMU,
+    a participant, an actuator's state logic) or a component named `logic` (a connector's gate).
+    Their events (`sw.logic.WorkingPosStartAnim_got`) are the logic's inner workings; the printed
+    event table leaves them to `-v` and shows what the plant did — sensors, actuators, sinks,
+    sources, clocks. summary.json keeps every event, each marked."""
+    return frozenset(f"{c.obj}.{c.name}" for c in components if isinstance(c, LogicComponent) or c.name == "logic")
 
 
 @dataclass(frozen=True)
@@ -24,6 +35,8 @@ class RunSummary:
     recorded: int                        # slots in recording.csv
     out: Path | None                     # the run folder, None: nothing written
     sections: tuple[SummarySection, ...] = ()
+    ended: Ending | None = None          # None: the run goes on (a summary taken mid-run)
+    logic: frozenset[str] = frozenset()  # `object.component` of the logic components (logic_components)
 
     @property
     def plant(self):
@@ -49,20 +62,32 @@ class RunSummary:
         return {"recording": str(self.out / "recording.csv"), "events": str(self.out / "events.csv"),
                 "summary": str(self.out / "summary.json")}
 
-    def lines(self) -> list[str]:
+    def is_logic(self, slot: str) -> bool:
+        """Whether an event slot (`object.component.slot`) belongs to a logic component."""
+        return slot.rpartition(".")[0] in self.logic
+
+    def lines(self, verbose: bool = False) -> list[str]:
+        """The printed summary: how the run ended and the sections' figures (the plant's) first,
+        then time, events and files. The event table lists the plant's events; `verbose`, also
+        the logic's (is_logic)."""
         rate = self.rate
-        out = [f"planthub run {self.scenario}  ({self.path})",
-               f"  simulated    {self.sim_seconds:.3f} s  ({self.ticks} ticks at {rate} Hz, "
-               f"communication step {1000 * self.substeps / rate:.4g} ms)"]
+        out = [f"planthub run {self.scenario}  ({self.path})"]
+        if self.ended is not None:
+            out.append(self.ended.line())
+        for section in self.sections:
+            out += section.lines()
+        out.append(f"  simulated    {self.sim_seconds:.3f} s  ({self.ticks} ticks at {rate} Hz, "
+                   f"communication step {1000 * self.substeps / rate:.4g} ms)")
         if self.wall_seconds is not None:
             details = [d for s in self.sections if (d := getattr(s, "wall_detail", lambda: "")())]
             full = "".join(f"; {d}" for d in details)
             out.append(f"  wall time    {self.wall_seconds:.3f} s  (real-time factor {self.realtime_factor:.1f}×{full})")
-        for section in self.sections:   # a plant engineer's figures first, the event table after them
-            out += section.lines()
-        out.append(f"  events       {sum(s.count for s in self.events.values())}")
-        width = max((len(k) for k in self.events), default=0)
-        for slot, stats in self.events.items():
+        shown = {k: s for k, s in self.events.items() if verbose or not self.is_logic(k)}
+        hidden = sum(s.count for k, s in self.events.items() if k not in shown)
+        note = f"  ({hidden} of them inside the logic, listed with -v)" if hidden else ""
+        out.append(f"  events       {sum(s.count for s in self.events.values())}{note}")
+        width = max((len(k) for k in shown), default=0)
+        for slot, stats in shown.items():
             detail = f"  ({stats.first_detail})" if stats.first_detail else ""
             out.append(f"    {slot:<{width}}  {stats.count:>4}×  first at {stats.first_tick / rate:.4f} s{detail}")
         if self.out is not None:
@@ -75,11 +100,13 @@ class RunSummary:
         return {
             "scenario": self.scenario,
             "file": str(self.path),
+            "ended": self.ended.as_dict() if self.ended is not None else None,
             "simulated": {"seconds": self.sim_seconds, "ticks": self.ticks, "physics_rate": self.rate,
                           "communication_step": self.substeps / self.rate},
             "wall": {"seconds": self.wall_seconds, "realtime_factor": self.realtime_factor,
                      **{k: v for s in self.sections for k, v in getattr(s, "wall_figures", dict)().items()}},
-            "events": {slot: {"count": s.count, "first": s.first_tick / self.rate, "first_detail": s.first_detail}
+            "events": {slot: {"count": s.count, "first": s.first_tick / self.rate, "first_detail": s.first_detail,
+                              "logic": self.is_logic(slot)}
                        for slot, s in self.events.items()},
             "files": self.files(),
             **{s.key: s.as_dict() for s in self.sections},

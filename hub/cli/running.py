@@ -1,0 +1,148 @@
+"""`planthub run` and `planthub test`: one scenario run, set up from the same options, printed as a summary or judged against its expectations."""
+from __future__ import annotations
+
+import logging
+import socket
+import sys
+import time
+from datetime import datetime
+from pathlib import Path
+
+from hub.cli.bus import bus_settings
+from hub.cli.exits import FAILED, OK, UsageError
+from hub.cli.options import overrides, set_texts, verbosity
+from hub.core.errors import PlanthubError, ScenarioError
+from hub.scenario.checker import load_scenario
+
+_log = logging.getLogger(__name__)
+
+
+def run_command(args) -> int:
+    """`planthub run`: the summary on stdout, the files in --out (default runs/<name>)."""
+    from hub.run.assembly import Run
+
+    scenario = load_scenario(args.scenario, overrides(args))
+    out = args.out or Path("runs") / (scenario.name + ("_replay" if args.replay else ""))
+    _check_replay(args, out)
+    bus, pacer = _bus(args, scenario), _pacer(args, scenario)
+    progress = [_Progress(scenario.run.end_tick)] if sys.stderr.isatty() and verbosity(args) >= 0 else []
+    try:
+        # signals: a Ctrl-C or SIGTERM ends the run at its next point, summary and files complete.
+        run = Run(scenario, out=out, bus=bus, replay=args.replay, pacer=pacer, observers=progress, signals=True)
+        try:
+            with run:
+                _log.debug(f"running {scenario.name} to t = {scenario.run.end_tick / scenario.run.physics_rate:g} s, "
+                           f"writing to {out}")
+                result = run.run()
+                run.close(result.stopped_by or "the run reached its end")
+        except KeyboardInterrupt:   # one that came outside the run's own handling (hub/run/interruption.py)
+            _print_run(run, args)   # the figures so far; summary.json says it was interrupted
+            raise
+    finally:
+        if bus is not None:
+            bus.close()
+    _print_run(run, args)
+    return run.interruption.exit_status or OK   # 130 after a Ctrl-C, 143 after SIGTERM
+
+
+def _print_run(run, args) -> None:
+    print("\n".join(run.summary().lines(verbose=verbosity(args) > 0)))
+    pacer, link, out = run.master.pacer, run.link, run.out
+    if pacer is not None:
+        print(f"  pacing       {pacer.summary()}")
+    if link is not None and link.lockstep is not None:
+        count = len(link.lockstep.peers)
+        print(f"  bus          {count} participant{'s' if count != 1 else ''}, "
+              f"{link.dataplane.samples} data-plane samples")
+    if out is not None and (out / "commands.csv").is_file():
+        print(f"  commands     {out / 'commands.csv'}")
+
+
+def test_command(args) -> int:
+    """`planthub test`: a line per expectation and the tally; exit 1 if one failed."""
+    from hub.run.junit import write_junit
+    from hub.run.simulation import Simulation
+
+    scenario = load_scenario(args.scenario, overrides(args))
+    if not scenario.expect:
+        raise UsageError(f"{args.scenario} has no `expect:` entries to judge")
+    if args.out is not None:
+        _check_replay(args, args.out)
+    bus, pacer = _bus(args, scenario), _pacer(args, scenario)
+    stamp = datetime.now().replace(microsecond=0)
+    started = time.perf_counter()
+    properties = [("scenario", str(args.scenario)), ("seed", str(scenario.run.seed)),
+                  *(("set", item) for item in set_texts(args))]
+    try:
+        with Simulation(args.scenario, overrides(args), out=args.out, bus=bus, replay=args.replay,
+                        pacer=pacer) as sim:
+            sim.run()
+            outcomes = sim.check()
+            summary = sim.summary()
+    except PlanthubError as exc:
+        # CI reads the XML, not the exit code alone: a run that failed, so nothing could be judged,
+        # is an error there (a bad scenario was found before the run, on loading: exit 3, no XML).
+        if args.junit and not isinstance(exc, ScenarioError):
+            write_junit(args.junit, scenario.name, [], time.perf_counter() - started, timestamp=stamp,
+                        hostname=socket.gethostname(), properties=properties, error=str(exc))
+        raise
+    finally:
+        if bus is not None:
+            bus.close()
+    seconds = time.perf_counter() - started
+    print(f"planthub test {summary.scenario}  ({args.scenario}, {summary.sim_seconds:g} s simulated)")
+    if summary.ended is not None:
+        print(summary.ended.line())
+    for outcome in outcomes:
+        print(f"  {'✓' if outcome.passed else '✗'} {outcome.expectation.name} — {outcome.message}")
+    failed = sum(not o.passed for o in outcomes)
+    print(f"{len(outcomes) - failed} passed, {failed} failed")
+    if args.junit:
+        ended = [("ended", summary.ended.reason)] if summary.ended is not None else []
+        write_junit(args.junit, summary.scenario, outcomes, seconds, timestamp=stamp, hostname=socket.gethostname(),
+                    properties=properties + ended, output="\n".join(summary.lines(verbose=True)) + "\n")
+    return FAILED if failed else OK
+
+
+def _check_replay(args, out: Path) -> None:
+    if args.replay and out.resolve() == args.replay.resolve():
+        raise UsageError(f"--out {out} is the run being replayed; write the replay elsewhere")
+
+
+def _bus(args, scenario):
+    settings = bus_settings(args, scenario)
+    if settings is None:
+        return None
+    from hub.bus.session import Bus   # Zenoh is loaded only for a run on the bus
+
+    return Bus(settings)
+
+
+def _pacer(args, scenario):
+    if not args.realtime:
+        return None
+    from hub.run.pacing import Pacer
+
+    return Pacer(scenario.run.physics_rate, args.realtime)
+
+
+class _Progress:
+    """A one-line progress display on a terminal, redrawn at most twice a second: an observer.
+    Drawn straight on stderr, not logged: it redraws one line in place and is no diagnostic."""
+
+    def __init__(self, end: int):
+        self.end = end
+        self.shown = self.started = time.monotonic()
+
+    def close(self, reason: str) -> None:
+        """The line ends with the run."""
+
+    def observe(self, tick: int, signals, events) -> None:
+        end = self.end
+        now = time.monotonic()
+        if now - self.shown >= 0.5 or tick >= end:
+            self.shown = now
+            sys.stderr.write(f"\r  {100 * tick / end:5.1f} %  {now - self.started:6.1f} s wall")
+            if tick >= end:
+                sys.stderr.write("\n")
+            sys.stderr.flush()
