@@ -34,3 +34,19 @@ def test_mutual_tls_without_access_control_is_still_exposure():
 def test_tls_without_mutual_is_warned_even_on_loopback():
     (warning,) = exposure(BusSettings(listen=("tls/127.0.0.1:7447",), tls=TlsSettings("ca.pem", "hub.pem", "hub.key")))
     assert warning.startswith("run.bus.tls without mutual: true: the hub does not check who connects")
+
+
+def test_validate_warns_of_a_hub_listening_on_every_interface(tmp_path):
+    import subprocess
+    import sys
+
+    from .helpers import ROOT
+
+    scene = tmp_path / "open.yaml"
+    scene.write_text((ROOT / "scenarios" / "belt_bottle_sensor.yaml").read_text()
+                     .replace("  seed: 0\n", "  seed: 0\n  bus: {listen: [tcp/0.0.0.0:7447]}\n"))
+    proc = subprocess.run([sys.executable, "-m", "hub", "validate", str(scene)], capture_output=True, text=True,
+                          cwd=ROOT, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert ("planthub: warning: the hub listens beyond this machine (tcp/0.0.0.0:7447) without mutual TLS and "
+            "access control") in proc.stderr

@@ -139,6 +139,11 @@ def _validate(args) -> int:
     run = scenario.run
     print(f"{args.scenario}: ok — {len(scenario.objects)} objects, {len(scenario.flows)} flows, "
           f"{len(scenario.record)} recorded slots, {run.end_tick / run.physics_rate:g} s at {run.physics_rate} Hz")
+    if run.bus is not None:
+        from hub.bus.settings import exposure
+
+        for warning in exposure(run.bus):   # said out loud before anyone runs it
+            _log.warning("planthub: warning: %s", warning)
     return OK
 
 
