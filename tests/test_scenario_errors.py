@@ -312,3 +312,17 @@ def test_defaults_give_every_object_of_a_module_its_parameters(write_scenario):
     params = {o.name: o.params for o in load_scenario(path).objects}
     assert (params["a"]["mass"], params["a"]["radius"]) == (0.02, 0.025)
     assert (params["b"]["mass"], params["b"]["radius"]) == (0.08, 0.025)
+
+
+def test_an_error_in_a_belt_is_not_reported_again_at_the_objects_placed_after_it(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        objects:
+          feed: {module: conveyor, position: [0, 0, 0], lenght: 1.0}
+          next: {module: conveyor, after: feed, length: 1.0}
+          sw: {module: conveyor, after: next, length: "1.0"}
+        """)
+    found, _ = problems(path)
+    assert found == [f"{path}:3: objects.feed: 'length' is missing",
+                     f"{path}:3: objects.feed.lenght: unknown key 'lenght' (did you mean 'length'?)",
+                     f"{path}:5: objects.sw.length: '1.0' is not of type 'number'"]   # nothing said of next.after

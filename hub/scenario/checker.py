@@ -282,7 +282,8 @@ class _Checker:
                 if params["id"] in ids:
                     self.problem(at + ("id",), f"duplicate id {params['id']!r} (also used by object {ids[params['id']]!r})")
                 ids.setdefault(params["id"], name)
-            if self.references(at, params, module.PARAMETERS, {o.name: o.module_name for o in objects}):
+            if self.references(at, params, module.PARAMETERS, {o.name: o.module_name for o in objects},
+                               failed=set(list(specs)[:list(specs).index(name)]) - set(tables)):
                 continue
             logic_module = self.registry.get("fmu") if logic is not None else None
             objects.append(ObjectSpec(name, module, spec["module"], params, logic, logic_module))
@@ -320,13 +321,17 @@ class _Checker:
             self.problem(at + ("logic",) + where, message)
         return None if found else logic
 
-    def references(self, at: tuple, params: dict, schema: dict, before: dict[str, str]) -> bool:
+    def references(self, at: tuple, params: dict, schema: dict, before: dict[str, str], failed=()) -> bool:
         """Parameters marked `"x-object": [modules]` name an object of one of those modules declared
-        earlier in the file (a belt placed `after` another); report any that does not."""
+        earlier in the file (a belt placed `after` another); report any that does not. One that
+        names an object already reported (`failed`) is not judged: its problem is that object's."""
         bad = False
         for key, prop in schema.get("properties", {}).items():
             kinds, name = prop.get("x-object"), params.get(key)
             if not kinds or not isinstance(name, str):
+                continue
+            if name in failed:
+                bad = True   # built on a broken object: skipped, but not reported again
                 continue
             if before.get(name) not in kinds:
                 candidates = [n for n, m in before.items() if m in kinds]
