@@ -118,11 +118,14 @@ class Simulation:
         raise PlanthubError(f"no slot {slot!r} in {self.scenario.path}{did_you_mean(slot, names)}")
 
     def check(self) -> list[Outcome]:
-        """The scenario's expectations judged on what was seen so far, in the scenario's order."""
+        """The scenario's expectations judged on what was seen so far, in the scenario's order, then
+        what its settings imply (with `run.orders`: that the run ends with its orders delivered)."""
         on_slots = iter(self.watcher.judge())
         plant = self.summary().plant
         jams = plant.jams if plant is not None else ()
-        return [e.judge(jams, self.time) if isinstance(e, NoJam) else next(on_slots) for e in self.scenario.expect]
+        outcomes = [e.judge(jams, self.time) if isinstance(e, NoJam) else next(on_slots) for e in self.scenario.expect]
+        # What the scenario's settings promise, judged by the modules that contribute them (run.orders).
+        return outcomes + [c.outcome(self.master.tick) for c in self._run.contributed if hasattr(c, "outcome")]
 
     def close(self) -> None:
         self._run.close()

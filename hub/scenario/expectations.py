@@ -38,6 +38,18 @@ class Expectation:
 
 
 @dataclass(frozen=True)
+class Implied:
+    """An expectation a scenario's setting implies, judged by the module that contributes it: with
+    `run.orders`, that the run ends with its orders delivered, not by its duration."""
+
+    name: str
+    line: int | None = None
+
+    def describe(self) -> str:
+        return self.name
+
+
+@dataclass(frozen=True)
 class NoJam:
     """`jams: none`: no bottle jammed at any time of the run (the run summary's rule,
     modules/plant/jams.py, with run.jam_after), judged from the plant's jam watch after the run."""

@@ -1,7 +1,10 @@
 """A run that ends with its orders: `run.orders` bottles taken out by the plant's sinks."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from hub.core.observer import Stop
+from hub.scenario.expectations import Implied, Outcome
 from modules.sink import Bin
 
 
@@ -30,3 +33,34 @@ class Orders:
         if not self.done():
             return None
         return Stop(f"{self.wanted} orders delivered at t = {tick / self.rate:.9g} s (run.orders)", ended=True)
+
+    # --- what `run.orders` promises: judged by `planthub test`, said in the summary -------------
+    def outcome(self, tick: int) -> Outcome:
+        """The implied expectation: the run ended with its orders delivered."""
+        met = Implied(f"the run ends with its {self.wanted} orders delivered (run.orders)")
+        if self.done():
+            return Outcome(met, True, f"{self.delivered} delivered")
+        return Outcome(met, False, f"the run ended at t = {tick / self.rate:.9g} s with {self.delivered} of "
+                                   f"{self.wanted} orders delivered")
+
+    def section(self) -> OrdersLine:
+        return OrdersLine(self.wanted, self.delivered)
+
+
+@dataclass(frozen=True)
+class OrdersLine:
+    """The summary's line for `run.orders` (a SummarySection, hub/core/observer.py)."""
+
+    wanted: int
+    delivered: int
+    key = "orders"
+
+    def lines(self) -> list[str]:
+        if self.delivered >= self.wanted:
+            return [f"  orders       {self.wanted} delivered (run.orders)"]
+        return [f"  orders       {self.delivered} of {self.wanted} delivered: the run ended before its orders "
+                f"(run.orders)"]
+
+    def as_dict(self) -> dict:
+        return {"wanted": self.wanted, "delivered": self.delivered,
+                "met": self.delivered >= self.wanted}
