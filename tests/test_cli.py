@@ -218,7 +218,7 @@ def test_the_summary_opens_with_how_the_run_ended_then_the_plants_figures(tmp_pa
         "kind": "duration", "reason": "reached its duration at t = 3.5 s (run.duration)"}
     plant = planthub("run", "scenarios/source_sink.yaml", "--out", tmp_path / "plant", "--set", "run.orders=4")
     starts = [line.split()[0] for line in plant.stdout.splitlines() if line.startswith("  ") and line[2] != " "]
-    assert starts[:8] == ["ended", "bottles", "delivered", "misrouted", "on", "throughput", "jams", "simulated"]
+    assert starts[:9] == ["ended", "bottles", "delivered", "misrouted", "on", "throughput", "jams", "orders", "simulated"]
     assert json.loads((tmp_path / "plant" / "summary.json").read_text())["ended"]["kind"] == "completed"
 
 

@@ -133,3 +133,39 @@ def test_a_misfit_hello_while_the_hub_waits_for_a_joiner_does_not_abort_the_join
         assert result.ticks == 150
         (refusal,) = stranger.refusals()
     assert refusal.startswith("participant 'drive' does not fit the scenario: its output 'speed' is int")
+
+
+def test_outputs_from_another_process_are_dropped_not_taken(tmp_path):
+    """A stranger answers every step of the launched participant with its own outputs, tagged with
+    the step the hub waits for: none is taken (they are not sealed with the participant's key),
+    so the recording is the participant's own, and the drops are counted and named."""
+    reference = tmp_path / "alone"
+    with hub(BELT_PARTICIPANT, reference, {"run.duration": 1.0}) as run:
+        run.run()
+    with Bus(BusSettings()) as bus, Bus(BusSettings(connect=tuple(bus.endpoints)), listen=False) as other:
+        steps = Inbox()
+        other.subscribe(wire.logic_key(RUN, "drive", "step"), lambda m: steps.put(m.payload))
+        stop = threading.Event()
+
+        def answer():
+            while not stop.is_set():
+                payload = steps.get(0.1)
+                if payload is not None:   # the step's number sits after the hub's seal
+                    n = msgpack.unpackb(payload[wire.SEAL:])[0]
+                    other.put(wire.logic_key(RUN, "drive", "output"), msgpack.packb([n, [99.0, True]]), wire.MSGPACK)
+
+        thread = threading.Thread(target=answer, daemon=True)
+        thread.start()
+        warnings = []
+        try:
+            with hub(BELT_PARTICIPANT, tmp_path / "attacked", {"run.duration": 1.0}, bus=bus) as run:
+                run.start()
+                run.link.lockstep.warn = warnings.append
+                run.run()
+                dropped = dict(run.link.lockstep.dropped)
+        finally:
+            stop.set()
+            thread.join(5)
+    assert (tmp_path / "attacked" / "recording.csv").read_bytes() == (reference / "recording.csv").read_bytes()
+    assert dropped.get(("drive", "foreign"), 0) > 10
+    assert any("dropped a foreign message for participant 'drive'" in w for w in warnings)

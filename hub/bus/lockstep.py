@@ -48,6 +48,7 @@ class _Peer:
     slave: object   # hub.logic.remote.RemoteSlave: the bus side knows it by its spec, link and counters
     process: Launched | None = None
     token: str | None = None           # handed to a launched process: its hello must carry it
+    key: bytes | None = None           # the token as the key that seals its steps and outputs
     refused: str = ""                  # why the last hello under its name was refused (for the time-out message)
     id: str | None = None              # the participant's own id, from its hello
     welcomed: bool = False
@@ -91,6 +92,7 @@ class Lockstep:
         self.inbox = Inbox()
         self.tick = 0
         self._closing = False
+        self.dropped: dict[tuple[str, str], int] = {}   # (participant, kind) → messages not taken
         self._token = None
 
     # --- start: launch what the scenario launches, wait for everyone ------------------------
@@ -120,7 +122,9 @@ class Lockstep:
         connect = [local_endpoint(e) for e in self.bus.endpoints] + list(self.bus.settings.connect)
         # A Zenoh router forwards only for clients; a peer hub talks to its peers directly.
         mode = "peer" if self.bus.settings.mode == "peer" else "client"
-        peer.token = secrets.token_hex(16)
+        if peer.token is None:   # one per participant and run: a relaunched process gets the same
+            peer.token = secrets.token_hex(16)
+            peer.key = peer.token.encode("ascii")
         env = {"PLANTHUB_RUN": self.run, "PLANTHUB_NAME": spec.name, "PLANTHUB_TOKEN": peer.token,
                "PLANTHUB_CONNECT": ",".join(connect),
                "PLANTHUB_MODE": mode, "PLANTHUB_LEASE": repr(self.lease),
@@ -182,7 +186,7 @@ class Lockstep:
         peer = slave.peer
         if peer.in_order is not None:
             values = [values[i] for i in peer.in_order]
-        peer.pending = message = wire.step_message(slave.sent, tick, ticks, t, h, values)
+        peer.pending = message = wire.seal(peer.key, wire.step_message(slave.sent, tick, ticks, t, h, values))
         slave.sent += 1
         peer.from_tick = tick
         self.tick = tick + ticks   # the point at which the run now waits for the answers
@@ -250,7 +254,20 @@ class Lockstep:
         return ("left the bus: its liveliness token went away (its process ended, froze longer than "
                 "its lease, or lost its connection)")
 
+    def _drop(self, peer: _Peer, kind: str, detail: str) -> None:
+        """A message for `peer` not taken: counted by kind, logged the first time of each kind."""
+        key = (peer.name, kind)
+        self.dropped[key] = self.dropped.get(key, 0) + 1
+        if self.dropped[key] == 1:
+            self.warn(f"dropped a {kind} message for participant {peer.name!r} ({detail}); "
+                      f"further ones are counted, not logged")
+
     def _output(self, peer: _Peer, payload: bytes) -> None:
+        try:
+            payload = wire.unseal(peer.key, payload)
+        except wire.WireError as exc:
+            self._drop(peer, "foreign", str(exc))
+            return
         try:
             message = wire.unpack(payload)
             # The common case, decided with a few type tests: the answer to the step the hub waits
@@ -279,6 +296,11 @@ class Lockstep:
                 if peer.slave.sent:   # rejoined mid-run: its step results count, not these
                     return
             elif n != peer.slave.sent - 1:
+                if n > peer.slave.sent - 1 or n < -1:
+                    self._drop(peer, "future" if n > 0 else "malformed", f"an output for step {n}, "
+                                                                         f"the hub is at step {peer.slave.sent - 1}")
+                elif not peer.pending or n < peer.slave.sent - 2:
+                    self._drop(peer, "stale", f"an output for step {n}, the hub is at step {peer.slave.sent - 1}")
                 return   # an answer to a step the hub no longer waits for (re-sent after a rejoin)
             try:
                 peer.result = [read(values[j]) for read, j in zip(peer.readers, peer.out_order)]
@@ -426,6 +448,9 @@ class Lockstep:
                 peer.slave.link = None
                 if peer.process is not None:
                     peer.process.stop(grace=0.0 if peer.lost else 3.0)
+            if self.dropped:
+                counts = ", ".join(f"{n} {kind} for {name!r}" for (name, kind), n in sorted(self.dropped.items()))
+                self.warn(f"messages dropped on the bus in this run: {counts}")
             if self._token is not None:
                 self._token.undeclare()
 

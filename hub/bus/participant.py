@@ -210,6 +210,11 @@ class _Link:
         self.hub_alive = False
         self.lost_at = None       # when the hub's token went away, while it is away
         self.last = None          # (step number, output message) of the last step served
+        # Launched by the hub: its token seals steps and outputs, so no other process can speak
+        # for either side (schemas/wire.md, "Sealed messages").
+        token = os.environ.get("PLANTHUB_TOKEN")
+        self.key = token.encode("ascii") if token else None
+        self.foreign = 0          # step messages that did not open with the key: not ours, dropped
 
     def __enter__(self):
         bus, inbox, key = self.bus, self.inbox, lambda *p: wire.logic_key(self.run, self.name, *p)
@@ -306,24 +311,32 @@ class _Link:
                 raise PlanthubError(f"the run stopped before I could {'re' if self.last else ''}join")
         if self.last is None:
             self.logic.begin(dict(welcome.get("parameters") or {}), float(welcome.get("time", 0.0)))
-        self.output.put(wire.output_message(-1, self.logic.current_outputs() if self.last is None
-                                            else wire.unpack(self.last[1])[1]))
+        self.output.put(wire.seal(self.key, wire.output_message(-1, self.logic.current_outputs() if self.last is None
+                                                                else wire.unpack(self.last[1])[1])))
         self.lost_at = None if self.hub_alive else time.monotonic()
 
     def _step(self, payload: bytes) -> None:
+        try:
+            payload = wire.unseal(self.key, payload)
+        except wire.WireError:
+            self.foreign += 1   # another process's step on our key: the hub's own ones open
+            if self.foreign == 1:
+                _log.warning(f"planthub participant {self.name!r}: dropped a step message not sealed by the hub")
+            return
         n, _tick, _ticks, t, h, values = wire.read_step(payload)
         if self.last is not None and self.last[0] == n:
-            self.output.put(self.last[1])   # asked again after a rejoin: the same answer
+            self.output.put(wire.seal(self.key, self.last[1]))   # asked again after a rejoin: the same answer
             return
         try:
             outputs = self.logic.advance(t, h, values)
         except Exception as exc:
             detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
-            self.output.put(wire.error_message(n, detail, "".join(traceback.format_tb(exc.__traceback__))))
+            self.output.put(wire.seal(self.key, wire.error_message(n, detail,
+                                                                    "".join(traceback.format_tb(exc.__traceback__)))))
             raise PlanthubError(f"step {n} failed: {detail}") from exc
         message = wire.output_message(n, outputs)
         self.last = (n, message)
-        self.output.put(message)
+        self.output.put(wire.seal(self.key, message))
 
 
 def _map(payload: bytes) -> dict:

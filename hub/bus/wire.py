@@ -1,6 +1,7 @@
 """The wire format of the bus (schemas/wire.md): key expressions, slot value codecs, control messages."""
 from __future__ import annotations
 
+import hmac
 import re
 import struct
 
@@ -208,6 +209,27 @@ def read_step(data: bytes):
 def output_message(n: int, outputs: list) -> bytes:
     """Participant → hub: the outputs after step `n` (n = -1: the initial outputs, before any step)."""
     return _hot.pack([n, outputs])
+
+
+# --- sealed lockstep messages: a launched participant and its hub share a per-run key ----------
+SEAL = 16   # bytes of HMAC-SHA256 before the message
+
+
+def seal(key: bytes | None, body: bytes) -> bytes:
+    """The message as it goes between the hub and a participant it launched (None: unsealed):
+    the first 16 bytes of HMAC-SHA256(key, body), then the body. Another process on the bus may
+    read it, but cannot make one that opens."""
+    return body if key is None else hmac.digest(key, body, "sha256")[:SEAL] + body
+
+
+def unseal(key: bytes | None, payload: bytes) -> bytes:
+    """The body of a sealed message; WireError if it was not sealed with `key`."""
+    if key is None:
+        return payload
+    body = payload[SEAL:]
+    if len(payload) < SEAL or not hmac.compare_digest(hmac.digest(key, body, "sha256")[:SEAL], payload[:SEAL]):
+        raise WireError("not sealed with this participant's key: another process's message")
+    return body
 
 
 def error_message(n: int, error: str, trace: str = "") -> bytes:

@@ -1,6 +1,7 @@
 """The belt drive as a participant written from schemas/wire.md alone: literal keys and msgpack
 structures, no planthub protocol code — what a participant in another language does. (Zenoh is
 reached through hub.bus only because every Zenoh call of this project lives there.)"""
+import hmac
 import os
 import sys
 import time
@@ -52,7 +53,12 @@ def main() -> int:
                         return 1
                     welcome = message
         ramp, speed, last = welcome["parameters"]["ramp"], 0.0, None
-        output.put(msgpack.packb([-1, [False, speed]]))
+        key = os.environ["PLANTHUB_TOKEN"].encode()   # launched: steps and outputs are sealed with it
+
+        def sealed(body: bytes) -> bytes:
+            return hmac.digest(key, body, "sha256")[:16] + body
+
+        output.put(sealed(msgpack.packb([-1, [False, speed]])))
         while True:
             item = inbox.get(30)
             if item is None:
@@ -62,7 +68,10 @@ def main() -> int:
                 return 0
             if kind != "step":
                 continue
-            n, _tick, _ticks, t, h, (setpoint, go) = msgpack.unpackb(payload)
+            tag, body = payload[:16], payload[16:]
+            if not hmac.compare_digest(tag, hmac.digest(key, body, "sha256")[:16]):
+                continue   # not the hub's
+            n, _tick, _ticks, t, h, (setpoint, go) = msgpack.unpackb(body)
             if last is not None and last[0] == n:
                 output.put(last[1])
                 continue
@@ -73,7 +82,7 @@ def main() -> int:
                     speed = target
                 else:
                     speed += most if gap > 0 else -most
-            last = (n, msgpack.packb([n, [speed != 0.0, speed]]))
+            last = (n, sealed(msgpack.packb([n, [speed != 0.0, speed]])))
             output.put(last[1])
 
 
