@@ -12,7 +12,7 @@
 | count.misrouted   | int    | source | bottles taken whose destination is not in `accepts`, every step |
 
 A bottle is taken out at the first communication point after it entered (it is parked off
-stage, see hub/physics/world.py `park`, and costs nothing from then on); all bottles that
+stage, see hub/physics/parking.py, and costs nothing from then on); all bottles that
 entered since the last point are taken, in the order they entered. Destinations come from
 the plant's manifest (modules/manifest.py): a source's bottles carry theirs, a `bottle`
 object has none and counts as `other`.
@@ -22,6 +22,10 @@ among them (a bottle without a destination included) is misrouted — counted on
 `count.misrouted`, fired on `bin.misrouted` and logged as `bin.misrouted` with its id and
 destination. A sink without `accepts` takes every bottle and judges none (the run summary
 then says misroutes were not judged). `destinations` only chooses the counting slots.
+
+A sink with `rejects: true` ends a reject lane (modules/pusher.py): the bottles it takes were
+rejected by the line, and the run summary counts them as rejects, on a line of their own, not
+as delivered; it judges no destination (a reject is never misrouted), so it takes no `accepts`.
 """
 from __future__ import annotations
 
@@ -59,12 +63,13 @@ class Bin(Component):
         Slot.source("misrouted", "void", "a bottle for another lane was taken out"),
     )
 
-    def __init__(self, obj, name, world, trigger, counter, accepts: tuple[str, ...] | None):
+    def __init__(self, obj, name, world, trigger, counter, accepts: tuple[str, ...] | None, rejects: bool = False):
         super().__init__(obj, name)
         self.world = world
         self.trigger = trigger
         self.counter = counter
         self.accepts = accepts            # None: the sink judges no destination
+        self.rejects = rejects            # it ends a reject lane: what it takes is rejected, not delivered
         self.taken: list[Delivery] = []   # taken at this point, parked at actuation
         self.deliveries: list[Delivery] = []   # every bottle taken so far, in order (the run summary reads it)
 
@@ -133,6 +138,9 @@ class Sink(Module):
                         "minItems": 1,
                         "description": "destinations this sink's lane is for; a bottle for any other is misrouted "
                                        "(default: judge none)"},
+            "rejects": {"type": "boolean", "default": False,
+                        "description": "the sink ends a reject lane: the bottles it takes count as rejected, "
+                                       "not delivered"},
         },
         "required": ["position"],
         "additionalProperties": False,
@@ -156,6 +164,9 @@ class Sink(Module):
     @classmethod
     def check(cls, params):
         problems = []
+        if params["rejects"] and "accepts" in params:
+            problems.append((("accepts",), "a reject sink (`rejects: true`) takes whatever the line rejected, "
+                                           "whatever its destination: it takes no `accepts`"))
         for i, d in enumerate(params["destinations"]):
             if not _NAME.match(d):
                 problems.append((("destinations", i), f"{d!r} cannot name a slot: use letters, digits and _ "
@@ -168,4 +179,5 @@ class Sink(Module):
     def build(cls, name, params, world):
         counter = Count(name, "count", params["destinations"])
         accepts = tuple(params["accepts"]) if "accepts" in params else None
-        return {"bin": Bin(name, "bin", world, add_volume(world, params), counter, accepts), "count": counter}
+        return {"bin": Bin(name, "bin", world, add_volume(world, params), counter, accepts, params["rejects"]),
+                "count": counter}

@@ -15,7 +15,7 @@ run.seed and the object's name, so every run draws the same and two sources draw
 
 Every body is created when the plant is built, never in the loop (pybullet is deterministic
 only for an identical sequence of calls, and collision shapes are never freed). Bottles not
-yet out are parked off stage (hub/physics/world.py `park`): asleep, without collision and not
+yet out are parked off stage (hub/physics/parking.py): asleep, without collision and not
 read per tick, so a full store costs next to nothing. A release puts the next bottle, upright
 and at rest, on the spot — once nothing stands within a bottle's width of it, so it is never
 put into another bottle. One release is pending at most: commands while one waits are merged.

@@ -1,9 +1,11 @@
 """The bottling plant (scenarios/bottling_plant.yaml, the scenario `make run` runs) on shortened
-runs: every bottle delivered reaches the sink of its destination, every lane delivers, no bottle
-tips, falls, speeds or passes a closed gate, and nothing jams; routing by the plant-management
-participant over Zenoh gives the run of the same logic in-process, bit for bit; a participant
-with two lanes swapped makes `planthub test` fail naming the misrouted bottles."""
+runs: every good bottle delivered reaches the sink of its destination, every bottle the filler
+left unfilled is pushed into the reject lane, every lane delivers, no bottle tips, falls, speeds
+or passes a closed gate, and nothing jams; routing by the plant-management participant over
+Zenoh gives the run of the same logic in-process, bit for bit; a participant with two lanes
+swapped makes `planthub test` fail naming the misrouted bottles."""
 import csv
+import json
 import subprocess
 import sys
 
@@ -17,6 +19,9 @@ SCENARIO = ROOT / "scenarios" / "bottling_plant.yaml"
 LANES = {f"sink_{lane}": lane for lane in "ABCDEF"}
 IN_PROCESS = {"objects.control.in_process": True}
 DURATION = 56.0     # s: the first delivery is at 34.7 s; by 56 s every lane has had a bottle
+# The filler's share of bad fills for the watched run: the plant's 4 % leaves its first bottle
+# unfilled only at the 36th; at 30 % the seed makes M002, M004, M013 and M015 bad, within 56 s.
+FAULTS = 0.3
 
 
 def rows(path):
@@ -34,22 +39,36 @@ def destinations(scenario):
 
 
 def deliveries(scenario, directory):
-    """(sink, bottle) in the order taken, and the misrouted as (bottle, destination, sink)."""
+    """(sink, bottle) in the order taken at the lanes' sinks, and the misrouted as (bottle,
+    destination, sink); the reject lane's sink is not a lane."""
     wanted = destinations(scenario)
     taken = [(e["slot"].split(".")[0], e["detail"]) for e in rows(directory / "events.csv")
-             if e["slot"].endswith(".bin.taken")]
+             if e["slot"].endswith(".bin.taken") and e["slot"].split(".")[0] in LANES]
     return taken, [(ident, wanted[ident], sink) for sink, ident in taken if LANES[sink] != wanted[ident]]
 
 
-def test_bottles_reach_their_destinations_soundly(tmp_path):
-    scenario, _, watch = run_watched(SCENARIO, tmp_path, {"run.duration": DURATION, **IN_PROCESS})
+def test_good_bottles_reach_their_destinations_and_the_bad_the_reject_lane_soundly(tmp_path):
+    overrides = {"run.duration": DURATION, "objects.filler.faults": FAULTS, **IN_PROCESS}
+    scenario, _, watch = run_watched(SCENARIO, tmp_path, overrides)
     watch.assert_sound()
+    events = rows(tmp_path / "events.csv")
+    bad = [e["detail"] for e in events if e["slot"] == "filler.process.faulty"]
+    rejected = [e["detail"] for e in events if e["slot"] == "reject.bin.taken"]
+    failed = [e["detail"] for e in events if e["slot"] == "inspect.trigger.failed"]
+    assert bad[:4] == ["M002", "M004", "M013", "M015"]          # the seed's draw, in filling order
+    assert rejected == failed == bad[:len(rejected)] and len(rejected) >= 3   # each bad one, in turn
+    assert not any(e["slot"] == "kicker.push.refused" for e in events)
     taken, misrouted = deliveries(scenario, tmp_path)
     assert not misrouted, f"misrouted (bottle, destination, sink): {misrouted}"
-    assert len({ident for _, ident in taken}) == len(taken) >= 10
+    assert not set(bad) & {ident for _, ident in taken}         # no bad bottle reached a lane
+    assert len({ident for _, ident in taken}) == len(taken) >= 8
     assert {sink for sink, _ in taken} == set(LANES)      # every lane delivered
     last = rows(tmp_path / "recording.csv")[-1]
     assert sum(int(last[f"{sink}.count.total"]) for sink in LANES) == len(taken)
+    assert int(last["reject.count.total"]) == len(rejected)
+    plant = json.loads((tmp_path / "summary.json").read_text())["plant"]
+    assert [r["bottle"] for r in plant["rejected"]] == rejected and plant["delivered"] == len(taken)
+    assert plant["misrouted"] == [] and plant["jams"] == []
 
 
 def test_the_run_summary_counts_what_the_event_log_shows_and_finds_no_jam(tmp_path):

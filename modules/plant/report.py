@@ -1,7 +1,7 @@
 """The plant block of the printed run summary (README, "The plant summary")."""
 from __future__ import annotations
 
-SHOWN = 10   # names printed per list (misrouted, on the line, jams); summary.json lists them all
+SHOWN = 10   # names printed per list (rejected, misrouted, on the line, jams); summary.json lists them all
 NO_DESTINATION = ""   # the destination of a bottle that has none (a `bottle` object): "" in JSON too
 
 
@@ -12,11 +12,11 @@ def plant_lines(p) -> list[str]:
     out = [f"  bottles in   {p.bottles_in}  ({', '.join(sources)})" if sources else f"  bottles in   {p.bottles_in}",
            f"  delivered    {p.delivered}" + (f"  ({_counts(p.by_destination)})" if p.delivered else "")]
     width = max((len(s.name) for s in p.sinks), default=0)
-    for sink in p.sinks:
-        lane = "" if sink.accepts is None else f"  lane for {', '.join(sink.accepts)}"
-        wrong = f", {sink.misrouted} misrouted" if sink.misrouted else ""
-        counts = f"  ({_counts(sink.by_destination)})" if sink.total else ""
-        out.append(f"    {sink.name:<{width}}  {sink.total:>4}{counts}{lane}{wrong}")
+    out += _sinks([s for s in p.sinks if not s.rejects], width)
+    if p.rejected is not None:   # a plant with a reject lane: its sinks, then each bottle rejected
+        out.append(f"  rejected     {len(p.rejected) or 'none'}")
+        out += _sinks([s for s in p.sinks if s.rejects], width)
+        out += _listed([f"{r.bottle} (for {_dest(r.destination)}) at {r.sink}, {r.time:.3f} s" for r in p.rejected])
     if p.misrouted is None:
         out.append("  misrouted    not judged (no sink says which destinations its lane is for: give sinks `accepts`)")
     else:
@@ -42,6 +42,16 @@ def plant_lines(p) -> list[str]:
     out += _listed([f"{j.bottle} on {j.belt} since {j.since:.3f} s, "
                     + (f"for {j.seconds(p.end):.2f} s until {j.until:.3f} s" if j.until is not None
                        else f"still at the end ({j.seconds(p.end):.2f} s)") for j in p.jams])
+    return out
+
+
+def _sinks(sinks, width: int) -> list[str]:
+    out = []
+    for sink in sinks:
+        lane = "  rejects" if sink.rejects else "" if sink.accepts is None else f"  lane for {', '.join(sink.accepts)}"
+        wrong = f", {sink.misrouted} misrouted" if sink.misrouted else ""
+        counts = f"  ({_counts(sink.by_destination)})" if sink.total else ""
+        out.append(f"    {sink.name:<{width}}  {sink.total:>4}{counts}{lane}{wrong}")
     return out
 
 

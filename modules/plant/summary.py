@@ -1,4 +1,4 @@
-"""The plant engineer's view of a run: bottles in, delivered by sink and destination, misrouted, on the line, throughput, jams."""
+"""The plant engineer's view of a run: bottles in, delivered by sink and destination, rejected, misrouted, on the line, throughput, jams."""
 from __future__ import annotations
 
 import math
@@ -26,11 +26,22 @@ class Misroute:
 
 
 @dataclass(frozen=True)
+class Reject:
+    """A bottle the line rejected: taken out at a reject sink (`rejects: true`), not delivered."""
+
+    bottle: str
+    destination: str
+    sink: str
+    time: float
+
+
+@dataclass(frozen=True)
 class SinkCount:
     name: str
     accepts: tuple[str, ...] | None     # None: the sink judges no destination
     by_destination: dict[str, int]      # sorted by destination
     misrouted: int
+    rejects: bool = False               # a reject sink: what it took is rejected, not delivered
 
     @property
     def total(self) -> int:
@@ -75,7 +86,7 @@ class PlantSummary:
     placed: int                          # bottles on the line from the start (`bottle` objects)
     released: dict[str, int]             # source → bottles it put on the line
     sinks: tuple[SinkCount, ...]
-    delivery_times: tuple[float, ...]    # every delivery, in order
+    delivery_times: tuple[float, ...]    # every delivery, in order (rejects are not deliveries)
     misrouted: tuple[Misroute, ...] | None   # None: no sink states `accepts`, nothing was judged
     on_line: tuple[OnLine, ...]
     jams: tuple[Jam, ...]
@@ -83,6 +94,7 @@ class PlantSummary:
     most_on_line: int = 0                # the most bottles on the line at one look (every 0.1 s)
     most_on_line_at: float = 0.0         # s, the first look that saw them
     busy: Busy | None = None             # the run while the line was near its fullest (wall time: not in as_dict)
+    rejected: tuple[Reject, ...] | None = None   # in time order; None: the plant has no reject sink
 
     @property
     def bottles_in(self) -> int:
@@ -94,8 +106,11 @@ class PlantSummary:
 
     @property
     def by_destination(self) -> dict[str, int]:
+        """Deliveries by destination, over the sinks that deliver (not the reject sinks)."""
         out: dict[str, int] = {}
         for sink in self.sinks:
+            if sink.rejects:
+                continue
             for dest, n in sink.by_destination.items():
                 out[dest] = out.get(dest, 0) + n
         return dict(sorted(out.items()))
@@ -140,8 +155,12 @@ class PlantSummary:
             "delivered": self.delivered,
             "by_destination": self.by_destination,
             "sinks": {s.name: {"total": s.total, "accepts": None if s.accepts is None else list(s.accepts),
-                               "by_destination": dict(s.by_destination), "misrouted": s.misrouted}
+                               "by_destination": dict(s.by_destination), "misrouted": s.misrouted,
+                               "rejects": s.rejects}
                       for s in self.sinks},
+            "rejected": None if self.rejected is None else [
+                {"bottle": r.bottle, "destination": r.destination, "sink": r.sink, "time": r.time}
+                for r in self.rejected],
             "misrouted": None if self.misrouted is None else [
                 {"bottle": m.bottle, "destination": m.destination, "sink": m.sink, "time": m.time}
                 for m in self.misrouted],
@@ -214,7 +233,11 @@ class PlantTally:
         deliveries = sorted(((d.tick, k, i), d, sink.obj) for k, sink in enumerate(self.sinks)
                             for i, d in enumerate(sink.deliveries))
         deliveries = [(key[0], d, obj) for key, d, obj in deliveries]
-        delivered = {d.body for _, d, _ in deliveries}
+        delivered = {d.body for _, d, _ in deliveries}   # taken out by any sink, rejects included
+        rejecting = {sink.obj for sink in self.sinks if sink.rejects}
+        rejected = tuple(Reject(d.bottle, d.destination, obj, tick / rate)
+                         for tick, d, obj in deliveries if obj in rejecting) if rejecting else None
+        deliveries = [(tick, d, obj) for tick, d, obj in deliveries if obj not in rejecting]
         rows, field, _ = world.belts_under()
         # A bottle put out at the last point has not been stepped: its state read is still off
         # stage. Like the event log, which reports a release at the point after, leave it out.
@@ -228,7 +251,7 @@ class PlantTally:
             for d in sink.deliveries:
                 by[d.destination] = by.get(d.destination, 0) + 1
             counts.append(SinkCount(sink.obj, sink.accepts, dict(sorted(by.items())),
-                                    sum(d.misrouted for d in sink.deliveries)))
+                                    sum(d.misrouted for d in sink.deliveries), sink.rejects))
         judged = any(sink.accepts is not None for sink in self.sinks)
         misrouted = tuple(Misroute(d.bottle, d.destination, obj, tick / rate)
                           for tick, d, obj in deliveries if d.misrouted) if judged else None
@@ -238,4 +261,4 @@ class PlantTally:
         most, at, busy = self._busy()
         return PlantSummary(self.start / rate, world.tick / rate, len(self.placed), released, tuple(counts),
                             tuple(tick / rate for tick, _, _ in deliveries), misrouted, on_line,
-                            tuple(self.watch.jams()), self.jam_after, most, at / rate, busy)
+                            tuple(self.watch.jams()), self.jam_after, most, at / rate, busy, rejected)

@@ -1,0 +1,56 @@
+"""The world's robot arms: what they grip leaves the dynamics and follows the tool, and triggers ride on their tools."""
+from __future__ import annotations
+
+import numpy as np
+
+from hub.physics.robot import KinematicArm
+
+
+class Arms:
+    """Robot arms (robot.py) in the world, the body each one grips (the paper's gripping
+    component) and the volume triggers that move with a tool (the paper's gripper trigger)."""
+
+    def __init__(self, client: int, bodies, bottles, rest, sleep, triggers):
+        self._client = client
+        self.bodies = bodies
+        self.bottles = bottles
+        self.rest = rest
+        self.sleep = sleep
+        self.triggers = triggers
+        self.arms: list[KinematicArm] = []
+        self.held: dict[KinematicArm, int] = {}   # arm → the body it grips (never rests)
+        self._following: list[tuple[int, KinematicArm, np.ndarray]] = []   # (trigger, arm, offset)
+
+    def add(self, base, yaw: float, tool_length: float) -> KinematicArm:
+        arm = KinematicArm(self._client, base, yaw, tool_length)
+        self.arms.append(arm)
+        return arm
+
+    def follow(self, trigger: int, arm: KinematicArm, offset) -> None:
+        """Make a volume trigger move with the arm's tool."""
+        self._following.append((trigger, arm, np.asarray(offset, float)))
+        self.triggers.move(trigger, arm.tool_position + offset)
+
+    def grip(self, arm: KinematicArm, body: int) -> None:
+        """The body leaves the dynamics and follows the tool."""
+        if body in self.bottles.base_bodies:
+            raise NotImplementedError("gripping a bottle with a second base body")
+        if self.rest.resting[body]:
+            self.sleep.wake(np.array([body]))
+        self.rest.forget(body)
+        self.held[arm] = body
+        arm.hold(self.bodies.ids[body], self.bodies.positions[body], self.bodies.orientations[body].tolist())
+
+    def release(self, arm: KinematicArm) -> None:
+        self.held.pop(arm, None)
+        arm.let_go()
+
+    def held_rows(self) -> list[int]:
+        return list(self.held.values())
+
+    def move(self, tick: int) -> None:
+        """After a tick: every arm in its pose for `tick`, and the triggers on moving tools with them."""
+        moved = [arm for arm in self.arms if arm.update(tick)]
+        for trigger, arm, offset in self._following:
+            if arm in moved:
+                self.triggers.move(trigger, arm.tool_position + offset)

@@ -1,0 +1,119 @@
+"""The body table: every dynamic body of the world in body order, its fixed properties and its state as read per tick."""
+from __future__ import annotations
+
+from itertools import chain
+
+import numpy as np
+
+from hub.physics._quiet import quiet_stderr
+
+with quiet_stderr():
+    import pybullet
+
+
+class Bodies:
+    """The world's dynamic bodies (bottles), numbered in the order they were made: their
+    pybullet ids, labels, masses, radii and half heights, and their state — positions,
+    orientations, velocities, spins — as numpy arrays read once per tick.
+
+    Not every body is read at every tick: a parked body (off stage) or one at rest (asleep in
+    the engine, rest.py) keeps its row as it was, which is what the engine holds for it. The
+    rows that are read (`live_rows`) and those in play (`play_rows`) are worked out again only
+    after something changed them (`stale`); after a body was put somewhere by the plant, the next
+    read takes every body (`full_read`).
+    """
+
+    def __init__(self, client: int, rest):
+        self._client = client
+        self._rest = rest
+        self.ids: list[int] = []
+        self.labels: list[str] = []
+        self.masses = np.zeros(0)
+        self.radii = np.zeros(0)
+        self.half_heights = np.zeros(0)
+        self.positions = np.zeros((0, 3))
+        self.orientations = np.zeros((0, 4))
+        self.velocities = np.zeros((0, 3))
+        self.angular_velocities = np.zeros((0, 3))
+        self.parked: set[int] = set()
+        self.started = False
+        self.full_read = True         # the next read takes every body (after a park or unpark)
+        self.stale = True             # the row sets below need working out again
+        self.live_rows = None         # rows read per tick: in play and awake (None: every body)
+        self.live_ids: list[int] = []
+        self.play_rows = None         # rows in play, not parked (None: every body)
+        self.under = None             # the field under each live row at the last read (−1: none)
+
+    def check_open(self) -> None:
+        """The body set is frozen at the first step (pybullet is deterministic only for an
+        identical sequence of calls, so nothing is created inside the loop)."""
+        if self.started:
+            raise RuntimeError("bodies must be created before the first step")
+
+    def add(self, body: int, label: str, mass: float, radius: float, half_height: float) -> int:
+        self.ids.append(body)
+        self.labels.append(label)
+        self.masses = np.append(self.masses, mass)
+        self.radii = np.append(self.radii, radius)
+        self.half_heights = np.append(self.half_heights, half_height)
+        return len(self.ids) - 1
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    def read(self, fields) -> None:
+        # One pose and one velocity query per body read: pybullet has no call for many bodies.
+        # The arrays are built in one pass over the flattened tuples (half the cost of one
+        # np.array per quantity), and positions, orientations and velocities are views of them.
+        # Parked and resting bodies are not read (their pose stands); all are after a park or unpark.
+        if not self.ids:
+            return
+        if self.stale:
+            self.refresh()
+        rows = None if self.full_read else self.live_rows
+        self.full_read = False
+        bodies = self.ids if rows is None else self.live_ids
+        if bodies:
+            client, n = self._client, len(bodies)
+            pose, velocity, flat = pybullet.getBasePositionAndOrientation, pybullet.getBaseVelocity, chain.from_iterable
+            # Per body 13 numbers: position, orientation, velocity, spin — one row of `state`.
+            read = np.fromiter(flat(flat([pose(b, client) + velocity(b, client) for b in bodies])), float, 13 * n)
+            if rows is None:
+                self._state = state = read.reshape(n, 13)
+                self.positions, self.orientations = state[:, :3], state[:, 3:7]
+                self.velocities, self.angular_velocities = state[:, 7:10], state[:, 10:]
+            else:
+                self._state[rows] = read.reshape(n, 13)
+        self.under = self.fields_under(fields, self.live_rows)
+
+    def refresh(self) -> None:
+        """Work out the bodies in play and those read per tick after a park, unpark, rest or wake."""
+        play = np.ones(len(self.ids), bool)
+        play[list(self.parked)] = False
+        live = play & ~self._rest.resting
+        self.play_rows = None if play.all() else np.flatnonzero(play)
+        self.live_rows = None if live.all() else np.flatnonzero(live)
+        self.live_ids = [] if self.live_rows is None else [self.ids[n] for n in self.live_rows.tolist()]
+        self.stale = False
+        self.under = None
+
+    def moved(self) -> None:
+        """A body was put somewhere by the plant (parked, unparked): read every body next tick."""
+        self.full_read = True
+        self.stale = True
+        self.under = None
+
+    def fields_under(self, fields, rows) -> np.ndarray:
+        return fields.which(self.positions if rows is None else self.positions[rows])
+
+    def awake_rows(self) -> np.ndarray:
+        if self.stale:
+            self.refresh()
+        return np.arange(len(self.ids)) if self.live_rows is None else self.live_rows
+
+    def in_play_rows(self) -> np.ndarray:
+        """The rows of the bodies in play (not parked), worked out afresh if the sets are stale."""
+        rows = self.play_rows
+        if rows is None or self.stale:
+            rows = np.array([n for n in range(len(self.ids)) if n not in self.parked], dtype=int)
+        return rows

@@ -1,0 +1,104 @@
+"""The engine: one headless pybullet client, how it is set up, and the static geometry (floors, rails) in it."""
+from __future__ import annotations
+
+from hub.physics import supports
+from hub.physics._quiet import quiet_stderr
+
+with quiet_stderr():
+    import pybullet
+
+
+class Engine:
+    """A pybullet client in DIRECT mode stepped at a fixed step of `dt`, and the calls every part
+    of the world makes on it: static boxes, friction off, bodies put to sleep and woken.
+
+    pybullet is deterministic only for an identical sequence of calls, so every part creates
+    its bodies before the first step and goes through the same few calls here in a fixed order.
+    """
+
+    def __init__(self, dt: float, gravity: float, solver_iterations: int):
+        self.client = pybullet.connect(pybullet.DIRECT)
+        self.call(pybullet.setGravity, 0.0, 0.0, gravity)
+        self.call(
+            pybullet.setPhysicsEngineParameter,
+            fixedTimeStep=dt,
+            numSubSteps=0,
+            numSolverIterations=solver_iterations,
+            deterministicOverlappingPairs=1,
+        )
+        self._supports: list[supports.SupportArea] = []
+
+    def call(self, fn, *args, **kwargs):
+        return fn(*args, physicsClientId=self.client, **kwargs)
+
+    def step(self) -> None:
+        pybullet.stepSimulation(self.client)
+
+    # --- static geometry ------------------------------------------------------------------
+    def add_static_box(self, center, half_extents, yaw: float = 0.0) -> None:
+        """A fixed box (support surface, guard rail) with friction and restitution 0, as in the paper."""
+        shape = self.call(pybullet.createCollisionShape, pybullet.GEOM_BOX, halfExtents=list(half_extents))
+        body = self.call(
+            pybullet.createMultiBody,
+            baseMass=0.0,
+            baseCollisionShapeIndex=shape,
+            basePosition=list(center),
+            baseOrientation=pybullet.getQuaternionFromEuler((0.0, 0.0, yaw)),
+        )
+        self.frictionless(body)
+
+    def add_static_boxes(self, centers, half_extents, yaws) -> None:
+        """One fixed body made of boxes (a guard rail along an arc), frictionless like every rail."""
+        self.frictionless(self.boxes_body(centers, half_extents, yaws))
+
+    def boxes_body(self, centers, half_extents, yaws) -> int:
+        """A fixed body made of yawed boxes placed in the world frame."""
+        shape = self.boxes_shape(centers, half_extents, yaws)
+        return self.call(pybullet.createMultiBody, baseMass=0.0, baseCollisionShapeIndex=shape)
+
+    def boxes_shape(self, centers, half_extents, yaws) -> int:
+        """One collision shape of yawed boxes, placed relative to the frame of the body that takes it."""
+        return self.call(
+            pybullet.createCollisionShapeArray,
+            shapeTypes=[pybullet.GEOM_BOX] * len(centers),
+            halfExtents=[list(h) for h in half_extents],
+            collisionFramePositions=[list(c) for c in centers],
+            collisionFrameOrientations=[pybullet.getQuaternionFromEuler((0.0, 0.0, y)) for y in yaws],
+        )
+
+    def add_support(self, z: float, rect, thickness: float = 0.02) -> None:
+        """Declare a belt's floor (xmin, ymin, xmax, ymax) at height z; touching floors become one
+        box when the world starts (see supports.py: a seam between boxes tips bottles)."""
+        self._supports.append(supports.SupportArea(float(z), tuple(float(v) for v in rect), thickness))
+
+    def build_supports(self) -> None:
+        for area in supports.merge(self._supports):
+            center, half = supports.box(area)
+            self.add_static_box(center, half)
+        self._supports = []
+
+    # --- per body -------------------------------------------------------------------------
+    def frictionless(self, body: int, link: int = -1) -> None:
+        self.call(
+            pybullet.changeDynamics, body, link,
+            lateralFriction=0.0, spinningFriction=0.0, rollingFriction=0.0, restitution=0.0,
+        )
+
+    def sleep(self, body: int) -> None:
+        """Leave a body asleep: the engine stops integrating it until something awake joins its island."""
+        self.call(pybullet.changeDynamics, body, -1, activationState=pybullet.ACTIVATION_STATE_ENABLE_SLEEPING)
+        self.call(pybullet.changeDynamics, body, -1, activationState=pybullet.ACTIVATION_STATE_SLEEP)
+
+    def wake(self, body: int) -> None:
+        """Wake a body and keep Bullet's own sleeping rule off it (it would stop a bottle riding a belt)."""
+        self.call(pybullet.changeDynamics, body, -1, activationState=pybullet.ACTIVATION_STATE_WAKE_UP)
+        self.call(pybullet.changeDynamics, body, -1, activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING)
+
+    def aabb(self, body: int, link: int = -1) -> tuple[tuple, tuple]:
+        """The box (lo, hi) the engine bounds a body (or one of its links) by, without its pair-search widening."""
+        return self.call(pybullet.getAABB, body, link)
+
+    def close(self) -> None:
+        if self.client is not None:
+            pybullet.disconnect(physicsClientId=self.client)
+            self.client = None

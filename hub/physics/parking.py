@@ -1,0 +1,60 @@
+"""Parked bodies: bottles out of play (in a source's store, taken out by a sink) wait off stage, asleep, unread."""
+from __future__ import annotations
+
+import numpy as np
+
+from hub.physics._quiet import quiet_stderr
+from hub.physics.rest import boxes
+
+with quiet_stderr():
+    import pybullet
+
+PARKED = (-100.0, 0.0, -100.0)   # off stage: parked bodies wait here, 0.5 m apart along y
+
+
+class Parking:
+    """Takes bodies out of play and puts them back: parked bodies are off stage, without
+    collision, asleep in the engine and not read per tick. Measured: 100 parked bottles take
+    the engine from 37 to 43 µs per tick (awake without collision, 99 µs), 1000 add ~0.2 µs
+    each to the engine and ~0.15 µs each to the numpy over all rows (`make bench`); reading
+    each would add ~2.5 µs."""
+
+    def __init__(self, engine, bodies, bottles, rest, sleep):
+        self.engine = engine
+        self.bodies = bodies
+        self.bottles = bottles
+        self.rest = rest
+        self.sleep = sleep
+
+    def park(self, body: int) -> None:
+        call = self.engine.call
+        spot = (PARKED[0], PARKED[1] + 0.5 * body, PARKED[2])
+        for b, z in self.bottles.parts(body):
+            call(pybullet.resetBasePositionAndOrientation, b, (spot[0], spot[1], spot[2] + z), (0, 0, 0, 1))
+            call(pybullet.resetBaseVelocity, b, (0, 0, 0), (0, 0, 0))
+            call(pybullet.setCollisionFilterGroupMask, b, -1, 0, 0)
+            self.engine.sleep(b)
+        self.bodies.parked.add(body)
+        self.rest.forget(body)
+        self.bodies.moved()
+
+    def unpark(self, body: int, base) -> None:
+        """Put a parked body back into play, upright and at rest, standing on `base`."""
+        call, half_heights = self.engine.call, self.bodies.half_heights
+        for b, z in self.bottles.parts(body):
+            center = (base[0], base[1], base[2] + half_heights[body] + z)
+            call(pybullet.resetBasePositionAndOrientation, b, center, (0, 0, 0, 1))
+            call(pybullet.resetBaseVelocity, b, (0, 0, 0), (0, 0, 0))
+            call(pybullet.setCollisionFilterGroupMask, b, -1, 1, -1)   # pybullet's default for a dynamic body
+            self.engine.wake(b)
+        self.bodies.parked.discard(body)
+        self.rest.forget(body)
+        if self.rest.resting.any():
+            # The state arrays learn where it stands at the next read; what rests near it wakes now.
+            centre = (base[0], base[1], base[2] + half_heights[body])
+            upright = boxes(np.array([(0.0, 0.0, 0.0, 1.0)]), self.bodies.radii[[body]], half_heights[[body]])
+            self.sleep.wake_in([centre], upright)
+        self.bodies.moved()
+
+    def is_parked(self, body: int) -> bool:
+        return body in self.bodies.parked

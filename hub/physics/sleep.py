@@ -1,0 +1,90 @@
+"""Sleep in the engine: bodies that rest.py says may rest are put to sleep in pybullet, and woken by its rule."""
+from __future__ import annotations
+
+import numpy as np
+
+from hub.physics._quiet import quiet_stderr
+from hub.physics.rest import overlapping
+
+with quiet_stderr():
+    import pybullet
+
+
+class Sleep:
+    """The engine's side of rest (rest.py holds the rule and the resting set, in numpy): puts the
+    bodies that have been still long enough to sleep, wakes them, and checks that the engine did
+    not move a resting body behind the hub's back (`check`)."""
+
+    def __init__(self, engine, bodies, rest):
+        self.engine = engine
+        self.bodies = bodies
+        self.rest = rest
+
+    def settle(self, fields, held, moving) -> None:
+        """Put to rest the bodies that have been still long enough where nothing drives them:
+        not held (`held`: rows an arm grips), and not in the way of a moving part (`moving`:
+        MovingParts, whose boxes would wake them at the next tick)."""
+        b, rest = self.bodies, self.rest
+        rows = b.awake_rows()
+        if len(rows) == 0:
+            return
+        field = b.under
+        undriven = field < 0
+        if len(fields):
+            undriven |= fields.speeds[field] == 0.0
+        if held:
+            undriven &= ~np.isin(rows, held)
+        state = b.positions, b.orientations, b.velocities, b.angular_velocities
+        candidates = rest.candidates(rows, state[2], state[3], undriven)
+        if len(candidates):
+            candidates = rest.settle(candidates, rows, *state)
+        if len(candidates) and moving.moving:
+            centres, extents = moving.boxes()
+            clear = ~overlapping(b.positions[candidates], rest.boxes(candidates, b.orientations),
+                                 centres, extents).any(axis=1)
+            candidates = candidates[clear]
+        if len(candidates):
+            for body in (b.ids[n] for n in candidates.tolist()):
+                self.engine.sleep(body)
+            rest.put(candidates, b.orientations, field[np.searchsorted(rows, candidates)])
+            # What the engine holds for a sleeping body from its next tick on.
+            b.velocities[candidates] = 0.0
+            b.angular_velocities[candidates] = 0.0
+            b.stale = True
+
+    def wake_near(self) -> None:
+        """Before a tick: wake the resting bodies an awake body has come near (the island Bullet wakes)."""
+        b = self.bodies
+        self.wake(self.rest.woken_by(b.awake_rows(), b.positions, b.orientations, b.velocities,
+                                     b.angular_velocities))
+
+    def wake_in(self, centres, extents) -> None:
+        """Wake the resting bodies (and their groups) whose boxes overlap any of the boxes (centres,
+        extents): what a part that the engine does not count as awake touches or will touch."""
+        if self.rest.resting.any():
+            self.wake(self.rest.joining(centres, extents, self.bodies.positions))
+
+    def wake_all(self) -> None:
+        """Wake every resting body (they rest again once still for sleep_after)."""
+        self.wake(self.rest.rows())
+
+    def wake(self, rows: np.ndarray) -> None:
+        if len(rows) == 0:
+            return
+        ids = self.bodies.ids
+        for body in (ids[n] for n in rows.tolist()):
+            self.engine.wake(body)
+        self.rest.wake(rows)
+        self.bodies.stale = True
+
+    def check(self, tick: int) -> None:
+        """Every resting body as the engine holds it: where planthub left it, not moving."""
+        b, client = self.bodies, self.engine.client
+        for n in self.rest.rows().tolist():
+            position, orientation = pybullet.getBasePositionAndOrientation(b.ids[n], client)
+            velocity, spin = pybullet.getBaseVelocity(b.ids[n], client)
+            if (tuple(b.positions[n]) != position or tuple(b.orientations[n]) != orientation
+                    or velocity != (0.0, 0.0, 0.0) or spin != (0.0, 0.0, 0.0)):
+                raise RuntimeError(
+                    f"tick {tick}: {b.labels[n]} rests in planthub but the engine moved it: "
+                    f"at {position} moving {velocity}, held at {tuple(b.positions[n])}")
