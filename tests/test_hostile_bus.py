@@ -169,3 +169,21 @@ def test_outputs_from_another_process_are_dropped_not_taken(tmp_path):
     assert (tmp_path / "attacked" / "recording.csv").read_bytes() == (reference / "recording.csv").read_bytes()
     assert dropped.get(("drive", "foreign"), 0) > 10
     assert any("dropped a foreign message for participant 'drive'" in w for w in warnings)
+
+
+def test_a_refused_command_is_cheap_and_never_echoes_unbounded_input():
+    from hub.bus.commands import CommandError, Commands
+    from hub.run.plant import Plant
+    from hub.scenario.checker import load_scenario
+
+    with Plant(load_scenario(ROOT / "scenarios" / "bottling_plant.yaml")) as plant:
+        commands = Commands(plant, recorder=None)
+        with pytest.raises(CommandError) as huge:
+            commands.parse({"op": "set", "slot": "x" * 10_000_000, "value": 1})
+        with pytest.raises(CommandError) as typo:
+            commands.parse({"op": "set", "slot": "sw1.blade.to_wrking", "value": None})
+        with pytest.raises(CommandError) as unknown:
+            commands.parse({"op": "set", "slot": "sw9.blade.to_working"})
+    assert len(str(huge.value)) < 200 and "(10000002 characters)" in str(huge.value)
+    assert str(typo.value) == "no slot 'sw1.blade.to_wrking' (did you mean 'sw1.blade.to_working'?)"
+    assert str(unknown.value).startswith("no slot 'sw9.blade.to_working' (did you mean 'sw")

@@ -57,6 +57,9 @@ class Commands:
         self.recorder = recorder
         self.rate = plant.scenario.run.physics_rate
         self.slots = {}    # "obj.comp.slot" → (index, Slot)
+        self._objects: dict[str, list[str]] = {}   # object → its slots' names, for "did you mean"
+        for ref in plant.index:
+            self._objects.setdefault(ref.obj, []).append(str(ref))
         owners = {(c.obj, c.name): c for c in plant.components}
         self._owner = {index: owners[(ref.obj, ref.component)] for ref, index in plant.index.items()}
         feedthrough = {(c.obj, c.name, t) for c in plant.components for t, _ in c.FEEDTHROUGH}
@@ -91,16 +94,15 @@ class Commands:
     def parse(self, message) -> Command:
         """A command message (a map: op, slot, value, by) → a checked Command, or CommandError."""
         if not isinstance(message, dict) or message.get("op") not in OPS:
-            raise CommandError(f"expected a map with op one of {', '.join(OPS)}, got {message!r}")
+            raise CommandError(f"expected a map with op one of {', '.join(OPS)}, got {_shown(message)}")
         op, by = message["op"], message.get("by", "")
-        if not isinstance(by, str):
-            raise CommandError(f"`by` must be a string, got {by!r}")
+        if not isinstance(by, str) or len(by) > MAX_NAME:
+            raise CommandError(f"`by` must be a string of at most {MAX_NAME} characters, got {_shown(by)}")
         if op == "stop":
             return Command("stop", by=by)
         name = message.get("slot")
         if not isinstance(name, str) or name not in self.slots:
-            shown = name if isinstance(name, str) else repr(name)
-            raise CommandError(f"no slot {shown!r}{did_you_mean(str(name), self.slots)}")
+            raise CommandError(f"no slot {_shown(name)}{self._nearest(name)}")
         if name in self._inner:
             raise CommandError(f"{name} is read by its own component within the step; command the slot "
                                f"that feeds it instead")
@@ -115,6 +117,16 @@ class Commands:
             except ValueError as exc:
                 raise CommandError(f"{name} is {kind.value}: {exc}") from None
         return Command(op, name, value, by)
+
+    def _nearest(self, name) -> str:
+        """A "did you mean" that costs about what an applied command does: among the slots of the
+        named object (or among the objects), never over every slot of the plant."""
+        if not isinstance(name, str) or len(name) > MAX_NAME:
+            return ""
+        obj = name.split(".", 1)[0]
+        if obj not in self._objects:
+            return did_you_mean(obj, self._objects)
+        return did_you_mean(name, self._objects[obj])
 
     def pending(self) -> bool:
         """Whether live commands wait for the next point."""
@@ -236,3 +248,13 @@ def command_message(op: str, slot: str = "", value=None, by: str = "", ident: st
     if value is not None:
         message["value"] = list(value) if isinstance(value, tuple) else value
     return wire.pack(message)
+
+
+#: the longest slot name or sender a command may carry: longer ones are refused unread and never echoed
+MAX_NAME = 200
+
+
+def _shown(value) -> str:
+    """A value for a message: repr, cut to 80 characters (a refused command is answered to everyone)."""
+    text = repr(value)
+    return text if len(text) <= 80 else f"{text[:60]}… ({len(text)} characters)"
