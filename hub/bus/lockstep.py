@@ -130,6 +130,10 @@ class Lockstep:
                "PLANTHUB_MODE": mode, "PLANTHUB_LEASE": repr(self.lease),
                "PLANTHUB_JOIN_TIMEOUT": repr(spec.join_timeout),
                **tls_environment(self.bus.settings.tls, loopback=not self.bus.settings.connect)}
+        if "PLANTHUB_TLS_KEY" in env and "--tls-key" not in spec.command:
+            self.warn(f"{spec.label} is launched with the hub's own certificate and private key "
+                      f"(PLANTHUB_TLS_KEY): it can act as the hub on the bus; give it a certificate of its "
+                      f"own with --tls-cert and --tls-key in its command")
         return Launched(spec.name, list(spec.command), spec.cwd, env)
 
     def _wait_ready(self, peers: list[_Peer], verb: str, done=lambda peer: peer.ready) -> None:
