@@ -181,6 +181,34 @@ def bottle_models() -> None:
                   f"| {off:.0f} | {off / costs[('simple', shape, False)]:.2f} |")
 
 
+def flush_cost() -> None:
+    """The recorder's bounded flush (hub/run/recorder.py FLUSH_PERIOD): the same recorded run with
+    the files flushed every 0.5 s of wall time and never flushed until closed, alternated."""
+    from hub.run import recorder as recording
+
+    print("\n## The recorder's flush: files readable after a kill, and what it costs\n")
+    print("| flush | µs per communication point (median) | ratio |")
+    print("|---|---:|---:|")
+    scenario = load_scenario(BELT, {"record": ["bottle.body.position", "bottle.body.velocity",
+                                               "barrier.trigger.occupied", "belt.drive.velocity"]})
+    points = scenario.run.end_tick // scenario.run.substeps + 1
+    samples = {"every 0.5 s": [], "never (closed only)": []}
+    default = recording.FLUSH_PERIOD
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            for _ in range(max(REPEATS, 5)):
+                for name, period in (("every 0.5 s", default), ("never (closed only)", float("inf"))):
+                    recording.FLUSH_PERIOD = period
+                    started = time.perf_counter()
+                    hub_run(scenario, Path(tmp))()
+                    samples[name].append(1e6 * (time.perf_counter() - started) / points)
+    finally:
+        recording.FLUSH_PERIOD = default
+    floor = statistics.median(samples["never (closed only)"])
+    for name, values in samples.items():
+        print(f"| {name} | {statistics.median(values):.1f} | {statistics.median(values) / floor:.3f} |")
+
+
 def main() -> int:
     print(f"planthub benchmark — median of {REPEATS} runs each, Python {sys.version.split()[0]}\n")
     rate_sweep()
@@ -189,6 +217,7 @@ def main() -> int:
     fmu_stepping()
     event_latency()
     plant_elements()
+    flush_cost()
     from .bench_bus import bus_lockstep, data_plane   # Zenoh: lockstep beside bare ping-pong, data plane
 
     bus_lockstep()
