@@ -93,21 +93,29 @@ class _TooMany(Exception):
     pass
 
 
+def _compose(text: str):
+    """The node tree of one YAML document (None: empty); YAMLError if it is not one."""
+    loader = _Loader(text)
+    try:
+        return loader.get_single_node()
+    finally:
+        loader.dispose()
+
+
 def read_value(text: str):
     """One value written as YAML 1.2 (a `--set KEY=VALUE` value): `1e6` is a number, `yes` a string.
     Raises ValueError naming the cause."""
     try:
-        loader = _Loader(text)
-        try:
-            node = loader.get_single_node()
-        finally:
-            loader.dispose()
+        node = _compose(text)
     except yaml.YAMLError as exc:
         raise ValueError(f"not valid YAML: {getattr(exc, 'problem', None) or exc}") from None
     if node is None:
         return None
     reader = _Reader("--set")
-    value = reader.value(node, ())
+    try:
+        value = reader.value(node, ())
+    except _TooMany:
+        raise ValueError(f"the value expands to more than {MAX_VALUES} values (aliases of aliases?)") from None
     if reader.problems:
         raise ValueError(reader.problems[0].message)
     return value
@@ -129,11 +137,7 @@ def load_yaml(path: Path) -> tuple[object, Lines, list[Problem]]:
         line = raw[:exc.start].count(b"\n") + 1
         return None, {}, [Problem(file, line, "", f"not UTF-8 text: byte 0x{raw[exc.start]:02x} at offset {exc.start}")]
     try:
-        loader = _Loader(text)
-        try:
-            node = loader.get_single_node()
-        finally:
-            loader.dispose()
+        node = _compose(text)
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         line = mark.line + 1 if mark else None
