@@ -1,4 +1,4 @@
-"""`make bench`, plant elements: what a parked bottle, an idle or moving arm and a gate switch cost per tick; queues (tests/bench_queue.py)."""
+"""`make bench`, plant elements: what a parked bottle, an idle or moving arm, a gate switch and the physics watch cost per tick; queues (tests/bench_queue.py)."""
 from __future__ import annotations
 
 import statistics
@@ -102,14 +102,58 @@ def gate_switch() -> None:
           f"{us:.2f} µs per switch.")
 
 
+def watch_cost() -> None:
+    """The physics watch (hub/physics/watch.py): its test alone on the arrays a tick reads, and a
+    whole run with and without it, side by side (medians; the run's difference is within noise)."""
+    print("\n## Physics watch: speed, non-finite and world-box test per tick (150 Hz)\n")
+    print("| bottles read per tick | watch.check µs/tick | one bare numpy max of the block, µs | "
+          "hub µs/tick watched | hub µs/tick unwatched |")
+    print("|---:|---:|---:|---:|---:|")
+    calls = 20000
+    for count in (5, 40, 100):
+        bottles = "\n".join(f"  b{i}: {{module: bottle, position: [{0.04 + 0.07 * i:.2f}, 0, 0]}}"
+                            for i in range(count))
+        path = Path(tempfile.mkdtemp()) / f"watch{count}.yaml"
+        path.write_text("planthub: 1\nrun: {duration: 10, physics_rate: 150, sleep_after: 0}\nobjects:\n"
+                        f"  belt: {{module: conveyor, position: [0, 0, 0], length: {0.1 + 0.07 * count:.2f}, "
+                        "speed: 0.0}\n" + bottles + "\n")
+        scenario = load_scenario(path)
+
+        def plant(watched: bool):
+            made = Plant(scenario)
+            made.world.watch.enabled = watched
+            return made
+
+        def steps(made):
+            made.world.step(TICKS)
+
+        with Plant(scenario) as made:
+            b, watch = made.world.bodies, made.world.watch
+            start = time.perf_counter()
+            for _ in range(calls):
+                watch.check(b.fresh, b.fresh_rows)
+            check = (time.perf_counter() - start) / calls * 1e6
+            block = b.fresh   # the scale of one numpy call on this machine now (it is noisy: read ratios)
+            start = time.perf_counter()
+            for _ in range(calls):
+                block.max()
+            bare = (time.perf_counter() - start) / calls * 1e6
+        on = median_us_per_tick(lambda: plant(True), steps)
+        off = median_us_per_tick(lambda: plant(False), steps)
+        print(f"| {count} | {check:.2f} | {bare:.2f} | {on:.0f} | {off:.0f} |")
+
+
 def plant_elements() -> None:
     from .bench_queue import queues
 
     parked_bottles()
     robot_arm()
     gate_switch()
+    watch_cost()
     queues()
 
 
 if __name__ == "__main__":
-    plant_elements()
+    import sys
+
+    watch_cost() if sys.argv[1:] == ["watch"] else plant_elements()

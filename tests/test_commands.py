@@ -9,7 +9,7 @@ from .helpers import ROOT, run_scenario
 STOP_AT_BARRIER = ROOT / "scenarios" / "stop_at_barrier.yaml"
 
 
-def replay(tmp_path, rows, record):
+def replay(tmp_path, rows, record, **settings):
     """Run stop_at_barrier with these commands (tick, op, slot, value) applied; its recording as dicts."""
     folder = tmp_path / "commanded"
     folder.mkdir()
@@ -20,7 +20,7 @@ def replay(tmp_path, rows, record):
         for tick, op, slot, value in rows:
             out.writerow([tick / 150, tick, op, slot, value, "test"])
     out_dir = tmp_path / "out"
-    run_scenario(STOP_AT_BARRIER, out_dir, {"record": record}, replay=folder)
+    run_scenario(STOP_AT_BARRIER, out_dir, {"record": record, **settings}, replay=folder)
     with open(out_dir / "recording.csv", newline="") as handle:
         return list(csv.DictReader(handle))
 
@@ -42,8 +42,9 @@ def test_a_belt_forced_to_stop_runs_again_when_released(tmp_path):
 def test_a_released_target_takes_what_its_flows_wrote_while_it_was_forced(tmp_path):
     """Forced to run through the barrier's stop, then released: the flow's false (written while
     forced) is the belt's value again."""
+    # 4.1 s: run on past the barrier, the bottle would fall off the belt's end at 4.37 s (a violation)
     rows = replay(tmp_path, [(30, "force", "belt.drive.run", "true"), (600, "release", "belt.drive.run", "")],
-                  ["belt.drive.running", "barrier.trigger.on_enter"])
+                  ["belt.drive.running", "barrier.trigger.on_enter"], **{"run.duration": 4.1})
     entered = next(float(r["time"]) for r in rows if r["barrier.trigger.on_enter"] == "1")
     assert entered < 4.0 and at(rows, 3.98)["belt.drive.running"] == "1"   # forced on past the barrier
     assert at(rows, 4.02)["belt.drive.running"] == "0"                     # released: the flow's stop

@@ -31,7 +31,7 @@ def test_barrier_stops_the_belt_in_the_step_it_fires(tmp_path):
 
 SCENE = """
 planthub: 1
-run: {duration: 6.0, physics_rate: 150}
+run: {duration: 5.0, physics_rate: 150}   # B reaches the belt's end at 5.8 s
 objects:
   belt: {module: conveyor, position: [0, 0, 0], length: 3.0, speed: 0.5}
   first: {module: bottle, position: [0.04, 0, 0], id: A}

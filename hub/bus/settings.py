@@ -22,6 +22,8 @@ class BusSettings:
     tls: TlsSettings | None = None       # certificates for tls/ endpoints (hub/bus/tls.py)
     control: tuple[str, ...] | None = None   # access control: the certificate common names that may
                                              # act on the control plane; None: whoever joins may
+    watch: tuple[str, ...] = ()          # access control: the common names that may also watch (data plane,
+                                         # run state, rate requests); the control names may anyway
     publish: str = "every"               # every | change: a data-plane slot goes out at each due point, or when changed
 
 

@@ -43,6 +43,10 @@ class Bodies:
         self.live_ids: list[int] = []
         self.play_rows = None         # rows in play, not parked (None: every body)
         self.under = None             # the field under each live row at the last read (−1: none)
+        # The rows the last read took that are in play, as one (n, 13) block, and which rows they
+        # are (None: every body): what the watch tests, without indexing the state again.
+        self.fresh = np.zeros((0, 13))
+        self.fresh_rows = None
 
     def check_open(self) -> None:
         """The body set is frozen at the first step (pybullet is deterministic only for an
@@ -82,8 +86,14 @@ class Bodies:
                 self._state = state = read.reshape(n, 13)
                 self.positions, self.orientations = state[:, :3], state[:, 3:7]
                 self.velocities, self.angular_velocities = state[:, 7:10], state[:, 10:]
+                # A full read (rare: the first, or after a park) takes parked bodies too; off stage, not in play.
+                play = self.play_rows
+                self.fresh, self.fresh_rows = (state, None) if play is None else (state[play], play)
             else:
-                self._state[rows] = read.reshape(n, 13)
+                self._state[rows] = self.fresh = read.reshape(n, 13)
+                self.fresh_rows = rows
+        else:
+            self.fresh, self.fresh_rows = np.zeros((0, 13)), None
         self.under = self.fields_under(fields, self.live_rows)
 
     def refresh(self) -> None:

@@ -1,6 +1,8 @@
 """The engine: one headless pybullet client, how it is set up, and the static geometry (floors, rails) in it."""
 from __future__ import annotations
 
+import numpy as np
+
 from hub.physics import supports
 from hub.physics._quiet import quiet_stderr
 
@@ -27,6 +29,9 @@ class Engine:
             deterministicOverlappingPairs=1,
         )
         self._supports: list[supports.SupportArea] = []
+        # Every fixed box made here, (body, centre, half extents, yaw) in the world frame: the
+        # world's box and the placement check at load read them (watch.py, placement.py).
+        self.static: list[tuple[int, tuple, tuple, float]] = []
 
     def call(self, fn, *args, **kwargs):
         return fn(*args, physicsClientId=self.client, **kwargs)
@@ -46,10 +51,13 @@ class Engine:
             baseOrientation=pybullet.getQuaternionFromEuler((0.0, 0.0, yaw)),
         )
         self.frictionless(body)
+        self.static.append((body, tuple(center), tuple(half_extents), float(yaw)))
 
     def add_static_boxes(self, centers, half_extents, yaws) -> None:
         """One fixed body made of boxes (a guard rail along an arc), frictionless like every rail."""
-        self.frictionless(self.boxes_body(centers, half_extents, yaws))
+        body = self.boxes_body(centers, half_extents, yaws)
+        self.frictionless(body)
+        self.static.extend((body, tuple(c), tuple(h), float(y)) for c, h, y in zip(centers, half_extents, yaws))
 
     def boxes_body(self, centers, half_extents, yaws) -> int:
         """A fixed body made of yawed boxes placed in the world frame."""
@@ -76,6 +84,18 @@ class Engine:
             center, half = supports.box(area)
             self.add_static_box(center, half)
         self._supports = []
+
+    def static_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per fixed box its bounding box (lo, hi), rows in `static` order, worked out from its
+        extents without asking the engine."""
+        if not self.static:
+            return np.zeros((0, 3)), np.zeros((0, 3))
+        centre = np.array([c for _, c, _, _ in self.static], float)
+        half = np.array([h for _, _, h, _ in self.static], float)
+        yaw = np.array([y for _, _, _, y in self.static], float)
+        c, s = np.abs(np.cos(yaw)), np.abs(np.sin(yaw))
+        reach = np.stack([c * half[:, 0] + s * half[:, 1], s * half[:, 0] + c * half[:, 1], half[:, 2]], 1)
+        return centre - reach, centre + reach
 
     # --- per body -------------------------------------------------------------------------
     def frictionless(self, body: int, link: int = -1) -> None:

@@ -1,10 +1,12 @@
 """The pybullet material-flow world: what the modules build in it, and the physics tick that steps it all."""
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
 
+from hub.core.errors import SimulationError
 from hub.physics._quiet import quiet_stderr
 from hub.physics.arms import Arms
 from hub.physics.bodies import Bodies
@@ -15,13 +17,17 @@ from hub.physics.frames import Arc, Pose, Straight
 from hub.physics.moving import MovingPart, MovingParts
 from hub.physics.parking import PARKED, Parking  # noqa: F401 (PARKED: read here by the plant's figures)
 from hub.physics.parts import SwitchableParts
+from hub.physics.placement import overlaps
 from hub.physics.rest import Rest
-from hub.physics.robot import KinematicArm
+from hub.physics.robot import REACH, SHOULDER, KinematicArm
 from hub.physics.sleep import Sleep
 from hub.physics.triggers import Latch, VolumeTriggers
+from hub.physics.watch import Watch
 
 with quiet_stderr():
     import pybullet   # also the name benchmarks time the engine's step by (tests/bench_bottling.py)
+
+_log = logging.getLogger(__name__)
 
 
 class PhysicsWorld:
@@ -41,6 +47,7 @@ class PhysicsWorld:
     | `parking` | parking.py | bodies out of play, off stage |
     | `robots` | arms.py, robot.py | robot arms, gripped bodies and the triggers on their tools |
     | `rest`, `sleep` | rest.py, sleep.py | bodies at rest: the rule (numpy) and the engine's side |
+    | `watch` | watch.py, placement.py | a run gone wrong: bodies too fast, non-finite or out of the box; overlaps at load |
 
     Each tick reads the state of every body in play once, except those at rest (asleep in the
     engine, their state stands); force fields and triggers work on those arrays with numpy,
@@ -98,6 +105,8 @@ class PhysicsWorld:
         self.moving = MovingParts(self.engine, rate, self.sleep)
         self.parking = Parking(self.engine, self.bodies, self.bottles, self.rest, self.sleep)
         self.robots = Arms(self._client, self.bodies, self.bottles, self.rest, self.sleep, self.triggers)
+        self.watch = Watch(self.gravity)        # off until configured; hub/run/plant.py does, from run.watch
+        self.warnings: list[str] = []           # what the checks at the start found doubtful (logged too)
 
     # --- the body table, as the modules read it ---------------------------------------------
     @property
@@ -175,6 +184,7 @@ class PhysicsWorld:
         """A belt's speed; bodies resting on it wake when it changes."""
         if speed != self.fields.speeds[field] and self.rest.resting.any():
             self.sleep.wake(self.rest.on_field(field, self.bodies.positions))
+        self.watch.belt_speed(speed)
         self.fields.set_speed(field, speed)
 
     def add_cylinder(self, base, radius: float, height: float, mass: float, label: str) -> int:
@@ -243,7 +253,31 @@ class PhysicsWorld:
             b.started = True
             self.engine.build_supports()
             b.read(self.fields)
+            self.check_start()
             self.triggers.evaluate(self.tick, b.positions, b.radii, b.half_heights)
+
+    def check_start(self) -> None:
+        """Before the first tick: bodies placed overlapping are an error (the engine would eject
+        them); the watch's box and bound are fixed; a trigger a bottle could jump is a warning."""
+        b = self.bodies
+        if not self.watch.enabled:
+            return
+        found = overlaps(self.engine, b)
+        if found:
+            raise SimulationError(f"tick {self.tick} (t = {self.tick * self.dt:.4f} s), at load: "
+                                  + "; ".join(found) + " — the engine would eject them: move them apart")
+        fastest = float(np.abs(self.fields.speeds).max()) if len(self.fields.speeds) else 0.0
+        lo, hi = self.engine.static_bounds()
+        # An arm carries a bottle anywhere within its reach, and may let go of it there.
+        reach = [(arm.base + SHOULDER, REACH + arm.tool_length) for arm in self.robots.arms]
+        lo = np.vstack([lo] + [c - r for c, r in reach])
+        hi = np.vstack([hi] + [c + r for c, r in reach])
+        play = b.in_play_rows()
+        self.watch.arm(lo.min(0) if len(lo) else np.full(3, np.inf), hi.max(0) if len(hi) else np.full(3, -np.inf),
+                       b.positions[play], fastest)
+        for message in self.triggers.jumpable(fastest * self.dt, b.radii[play]):
+            self.warnings.append(message)
+            _log.warning("%s", message)
 
     def step(self, substeps: int, stop_on_event: bool = False) -> int:
         """Advance up to `substeps` ticks: force fields applied and triggers evaluated at every tick.
@@ -256,7 +290,7 @@ class PhysicsWorld:
         """
         self.start()
         step, client, triggers, rest = pybullet.stepSimulation, self._client, self.triggers, self.rest
-        b, sleep, moving, arms = self.bodies, self.sleep, self.moving, self.robots
+        b, sleep, moving, arms, watch = self.bodies, self.sleep, self.moving, self.robots, self.watch
         for done in range(1, substeps + 1):
             if rest.resting.any():
                 sleep.wake_near()
@@ -271,7 +305,11 @@ class PhysicsWorld:
                 moving.update(self.tick)
             full = b.full_read
             b.read(self.fields)
-            moved = None if full else b.live_rows
+            if watch.enabled:
+                bad = watch.check(b.fresh, b.fresh_rows)
+                if bad is not None:
+                    self._violation(bad)
+            moved = None if full or b.full_read else b.live_rows   # full_read again: the watch took a body out
             event = triggers.evaluate(self.tick, b.positions, b.radii, b.half_heights, b.play_rows, moved)
             if self.check_rest:
                 sleep.check(self.tick)
@@ -280,6 +318,24 @@ class PhysicsWorld:
             if event and stop_on_event:
                 return done
         return substeps
+
+    def _violation(self, rows: np.ndarray) -> None:
+        """Bodies the watch caught at this tick: stop the run naming the first, or (policy
+        `remove`) park each and log it. A body an arm holds follows the tool, not the engine: exempt."""
+        held = set(self.robots.held_rows())
+        b, when = self.bodies, f"tick {self.tick} (t = {self.tick * self.dt:.4f} s)"
+        for row in (int(r) for r in rows):
+            if row in held:
+                continue
+            cause = self.watch.cause(b.positions[row], b.velocities[row],
+                                     np.concatenate([b.orientations[row], b.angular_velocities[row]]))
+            message = f"bottle {b.labels[row]!r}, {when}: {cause}"
+            if self.watch.policy == "stop":
+                raise SimulationError(message + " — run.watch.on_violation: remove takes such a body out instead")
+            self.watch.removed.append((self.tick, row, cause))
+            _log.warning("%s; taken out of the run (run.watch.on_violation: remove)", message)
+            self.park(row)
+        b.refresh()   # the triggers at this tick see the bodies in play without it
 
     def step_engine_only(self, substeps: int) -> None:
         """Only pybullet's own stepping, no state reads, fields or triggers: the floor for benchmarks."""

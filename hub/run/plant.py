@@ -19,6 +19,7 @@ class Plant:
         self.scenario = scenario
         self.world = PhysicsWorld(scenario.run.physics_rate, sleep_after=scenario.run.sleep_after)
         self.world.seed = scenario.run.seed   # for modules that draw at build time (a source's destinations)
+        self.world.watch.configure(scenario.run.max_speed, scenario.run.on_violation)
         try:
             self.objects: dict[str, DynamicObject] = {}
             self.components: list[Component] = []

@@ -116,10 +116,11 @@ def _bus_settings(bus: dict, base: Path) -> BusSettings:
     control = None
     if isinstance(access, dict) and isinstance(access.get("control"), list):
         control = tuple(x for x in access["control"] if isinstance(x, str))
+    watch = tuple(x for x in access.get("watch", ()) if isinstance(x, str)) if isinstance(access, dict) else ()
     return BusSettings(get("mode", str), strings("listen"), strings("connect"), get("scouting", bool),
                        float(get("lease", (int, float))), get("on_loss", str),
                        float(get("publish_period", (int, float))), strings("expose"), tls=tls,
-                       control=control, publish=get("publish", str))
+                       control=control, publish=get("publish", str), watch=watch)
 
 
 def _scenario_schema() -> dict:
@@ -211,6 +212,7 @@ class _Checker:
                 substeps = lo
         ticks = round(setting("duration", 10) * rate)
         end = max(1, math.ceil(ticks / substeps)) * substeps
+        watch = run["watch"] if isinstance(run.get("watch"), dict) else {}   # bad values: the schema reports them
         return RunSettings(
             rate, substeps, end, setting("seed", 0, int),
             event_driven=run.get("event_driven") is True,
@@ -219,7 +221,10 @@ class _Checker:
             sleep_after=float(run["sleep_after"]) if type(run.get("sleep_after")) in (int, float)
             and run["sleep_after"] >= 0 else 0.05,
             orders=setting("orders", None, int),
-            bus=self.bus_settings(run["bus"]) if isinstance(run.get("bus"), dict) else None)
+            bus=self.bus_settings(run["bus"]) if isinstance(run.get("bus"), dict) else None,
+            max_speed=float(watch["max_speed"]) if type(watch.get("max_speed")) in (int, float)
+            and watch["max_speed"] > 0 else None,
+            on_violation=watch.get("on_violation") if watch.get("on_violation") in ("stop", "remove") else "stop")
 
     def orders(self, run: RunSettings, objects) -> None:
         """`run.orders` needs sinks to deliver to, and no more orders than the sources put out."""

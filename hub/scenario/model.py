@@ -23,6 +23,8 @@ class RunSettings:
     sleep_after: float = 0.05    # s a bottle stands still where nothing drives it before it rests (hub/physics/rest.py); 0: never
     orders: int | None = None    # the run ends once the sinks took this many bottles (modules/plant/orders.py); None: at its duration
     bus: BusSettings | None = None   # None: no `run.bus` section
+    max_speed: float | None = None   # run.watch.max_speed, m/s; None: from the fastest belt (hub/physics/watch.py)
+    on_violation: str = "stop"       # run.watch.on_violation: "stop" the run, or "remove" the body and log it
 
     @property
     def dt(self) -> float:
