@@ -82,6 +82,10 @@ def test_a_launched_participant_dies_with_a_hub_killed_by_sigkill(tmp_path):
         time.sleep(2.0)
         alive = subprocess.run(["ps", "-o", "stat=", "-p", str(child)], capture_output=True, text=True).stdout.strip()
         assert alive in ("", "Z"), f"participant {child} outlived the hub ({alive})"
+        # Its files were flushed at most 0.5 s of wall time before the kill: readable, header first.
+        recorded = rows(tmp_path / "out" / "recording.csv")
+        assert recorded and float(recorded[-1]["time"]) > 0.0
+        assert (tmp_path / "out" / "events.csv").read_text().startswith("time,tick,slot,detail\n")
     finally:
         if hub.poll() is None:
             hub.kill()
