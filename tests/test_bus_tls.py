@@ -3,6 +3,8 @@ as over tcp; a participant without the right authority or certificate cannot joi
 
     drive.logic ══ tls/127.0.0.1 (mutual) ══ python -m modules.belt_drive_logic
 """
+import time
+
 import pytest
 import trustme
 
@@ -13,6 +15,7 @@ from hub.scenario.checker import load_scenario
 from hub.bus.tls import TlsSettings
 
 from .bus_support import BELT_FMU, BELT_PARTICIPANT, hub, output_of, process, same_files
+from .dataplane_support import every_point, settle
 from .helpers import run_scenario
 
 
@@ -132,8 +135,8 @@ def test_an_operator_command_goes_over_tls(certs, tmp_path):
     assert master.stopped_by.startswith("stopped by an operator")
 
 
-def hub_settings(certs, control=None) -> BusSettings:
-    return BusSettings(listen=(tls_endpoint(),), control=control, tls=TlsSettings(
+def hub_settings(certs, control=None, watch=()) -> BusSettings:
+    return BusSettings(listen=(tls_endpoint(),), control=control, watch=watch, tls=TlsSettings(
         str(certs / "ca.pem"), str(certs / "hub.pem"), str(certs / "hub.key"), mutual=True))
 
 
@@ -141,37 +144,79 @@ def own(certs, name) -> TlsSettings:
     return TlsSettings(str(certs / "ca.pem"), str(certs / f"{name}.pem"), str(certs / f"{name}.key"), mutual=True)
 
 
-def test_under_access_control_a_certificate_not_named_may_watch_but_not_command(certs, tmp_path):
+def test_under_access_control_a_watch_role_may_watch_and_ask_rates_but_not_command(certs, tmp_path):
     """Zenoh drops what access control denies without a word: the command gets no answer and the
-    run goes to its end, while the samples the HMI watches keep coming."""
+    run goes to its end, while the samples the HMI watches keep coming, at the rate it asked."""
     from hub.core.errors import PlanthubError
     from hub.live import Viewer
 
-    with Bus(hub_settings(certs, control=("plc",))) as bus, hub(BELT_FMU, tmp_path, bus=bus) as master, \
+    with Bus(hub_settings(certs, control=("plc",), watch=("hmi",))) as bus, \
+            every_point(BELT_FMU, tmp_path, bus=bus) as master, \
             Viewer("belt_ramp_fmu", bus.endpoints, tls=own(certs, "hmi")) as hmi:
         master.start()
-        hmi.watch("drive/logic/speed")
+        hmi.watch("drive/logic/speed", period=0.1)   # a rate request: it sees the hub's token, the hub its put
+        settle(master, lambda: master.dataplane.live and hmi.id in master.dataplane.requests)
         ident = hmi.command("stop", by="hmi", wait=None)
         master.run()
-        assert hmi.next(timeout=5.0) is not None
+        ticks = [s.tick for s in iter(lambda: hmi.next(timeout=1.0), None)]
         with pytest.raises(PlanthubError, match="no answer to command"):
             hmi.answer(ident, 0.5)
+    assert ticks == list(range(0, 901, 15))   # every 0.1 s: the rate it asked for, to the last point
     assert not master.stopped_by
     assert not (tmp_path / "commands.csv").exists()
+
+
+def test_under_access_control_a_control_role_may_watch_too(certs, tmp_path):
+    from hub.live import Viewer
+
+    with Bus(hub_settings(certs, control=("plc",), watch=("hmi",))) as bus, hub(BELT_FMU, tmp_path, bus=bus) as master, \
+            Viewer("belt_ramp_fmu", bus.endpoints, tls=own(certs, "plc")) as plc:
+        master.start()
+        plc.watch("drive/logic/speed")
+        settle(master, lambda: master.dataplane.live)
+        master.run()
+        assert plc.next(timeout=5.0) is not None
+
+
+def test_under_access_control_a_certificate_named_nowhere_watches_nothing(certs, tmp_path):
+    """Signed by the authority, so it connects; named neither in watch nor in control, so its
+    subscription and its rate request never reach the hub, and nothing reaches it. Denials are
+    silent: the hub is asked what it learned, and the viewer gets a bounded wait after the run."""
+    from hub.bus import wire
+    from hub.core.errors import PlanthubError
+    from hub.live import Viewer
+
+    with Bus(hub_settings(certs, control=("plc",), watch=("operator",))) as bus, \
+            hub(BELT_FMU, tmp_path, bus=bus) as master, \
+            Viewer("belt_ramp_fmu", bus.endpoints, tls=own(certs, "hmi")) as hmi:
+        master.start()
+        hmi.watch("**")
+        hmi.bus.put(wire.control_key("belt_ramp_fmu", "viewer", hmi.id, "rate"),
+                    wire.pack({"key": "plant/belt_ramp_fmu/**", "period": 0.1}), wire.MSGPACK)
+        time.sleep(1.0)   # what a listed viewer needs here is milliseconds (the tests above)
+        master.dataplane.update()
+        learned = (list(master.dataplane.live), dict(master.dataplane.requests), set(master.dataplane.viewers))
+        master.run()
+        got = hmi.next(timeout=1.0)
+        with pytest.raises(PlanthubError, match="no hub for run 'belt_ramp_fmu' within 0.5 s"):
+            hmi.wait_for_hub(0.5)   # not even the hub's liveliness token
+    assert learned == ([], {}, set())
+    assert got is None
+    assert hmi.state == {}   # nor the run's state
 
 
 def test_under_access_control_a_participant_not_named_cannot_join(certs, tmp_path):
     scene = tmp_path / "joined.yaml"
     scene.write_text(BELT_PARTICIPANT.read_text().replace("    command: [python, -m, modules.belt_drive_logic]\n",
                                                           "    join_timeout: 2\n"))
-    with Bus(hub_settings(certs, control=("plc",))) as bus, hub(scene, bus=bus) as master:
+    with Bus(hub_settings(certs, control=("plc",), watch=("hmi",))) as bus, hub(scene, bus=bus) as master:
         with process("-m", "modules.belt_drive_logic", "--run", "joined", "--name", "drive",
                      "--connect", bus.endpoints[0], "--tls-ca", certs / "ca.pem",
                      "--tls-cert", certs / "hmi.pem", "--tls-key", certs / "hmi.key") as proc:
             with pytest.raises(SimulationError, match="participant 'drive' did not join within 2 s"):
                 master.run()
             code, _, err = output_of(proc)
-    # It saw the hub and the run's state, but its hello went nowhere.
+    # A watch role: it saw the hub and the run's state, but its hello went nowhere.
     assert (code, err) == (1, "planthub participant 'drive': the run stopped before I could join\n")
 
 
@@ -235,6 +280,22 @@ def test_tls_settings_with_no_tls_endpoint_are_named(write_scenario, certs):
             listen: [tcp/0.0.0.0:7447]
             tls: {{ca: {certs}/ca.pem, certificate: {certs}/hub.pem, key: {certs}/hub.key}}""")
     assert problems == ["scene.yaml:5: run.bus.tls: no endpoint uses it (tcp/0.0.0.0:7447): write tls/HOST:PORT"]
+
+
+def test_the_access_section_names_who_may_watch(write_scenario, certs):
+    path = write_scenario(f"""
+        planthub: 1
+        run:
+          bus:
+            listen: [tls/127.0.0.1:7447]
+            tls: {{ca: {certs}/ca.pem, certificate: {certs}/hub.pem, key: {certs}/hub.key, mutual: true}}
+            access: {{control: [plc], watch: [hmi, dashboard]}}
+        objects:
+          c: {{module: constant, type: real, value: 1}}
+        """)
+    bus = load_scenario(path).run.bus
+    assert (bus.control, bus.watch) == (("plc",), ("hmi", "dashboard"))
+    assert BusSettings().watch == ()
 
 
 def test_access_control_without_mutual_tls_is_named(write_scenario, certs):

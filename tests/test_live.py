@@ -1,5 +1,7 @@
 """Live participants: a viewer watches slots by key expression (published only while watched, at the
 rate it asked for); an operator command is applied at the next point, recorded, and replayed bit for bit.
+The runs that compare every sample with the recording go at the data plane's pace (EveryPoint); what
+the sender skips under load: tests/test_watchers.py.
 
     hub ── plant/<run>/drive/logic/speed ──► viewer
     hub ◄── plant/<run>/@cosim/command ───── operator (set drive.logic.speed_setpoint 0.3)
@@ -17,6 +19,7 @@ from hub.bus.settings import BusSettings
 from hub.scenario.checker import load_scenario
 
 from .bus_support import BELT_FMU, hub, same_files
+from .dataplane_support import every_point, settle
 from .fmus.fmu_support import build
 from .helpers import ROOT
 
@@ -40,14 +43,6 @@ def rows(path):
         return list(csv.DictReader(f))
 
 
-def settle(master, condition):
-    """Let the hub take in what arrived (subscribers, requests) until `condition` holds."""
-    def check():
-        master.dataplane.update()
-        return condition()
-    assert wait_until(check, 5.0)
-
-
 def samples_until(viewer, last_tick, slot=None):
     """Samples up to the one at `last_tick` (of `slot`, if given); fails after 5 s without one."""
     out = []
@@ -59,7 +54,7 @@ def samples_until(viewer, last_tick, slot=None):
 
 
 def test_a_viewer_gets_every_point_of_the_slot_it_watches_and_nothing_else_is_sent(bus, tmp_path):
-    with hub(BELT_FMU, tmp_path, bus=bus) as master, Viewer(RUN, bus.endpoints) as viewer:
+    with every_point(BELT_FMU, tmp_path, bus=bus) as master, Viewer(RUN, bus.endpoints) as viewer:
         master.start()
         viewer.watch("drive/logic/speed")
         settle(master, lambda: len(master.dataplane.live) == 1)
@@ -73,7 +68,7 @@ def test_a_viewer_gets_every_point_of_the_slot_it_watches_and_nothing_else_is_se
 
 
 def test_a_viewer_asks_for_a_slower_rate(bus):
-    with hub(BELT_FMU, bus=bus) as master, Viewer(RUN, bus.endpoints) as viewer:
+    with every_point(BELT_FMU, bus=bus) as master, Viewer(RUN, bus.endpoints) as viewer:
         master.start()
         viewer.watch("drive/logic/*", period=0.1)
         settle(master, lambda: len(master.dataplane.live) == 4 and master.dataplane.requests)   # inputs too
@@ -84,6 +79,7 @@ def test_a_viewer_asks_for_a_slower_rate(bus):
 
 
 def test_an_event_is_sent_whenever_it_fires_whatever_the_rate(bus):
+    """Not at the data plane's pace: an event at a point the sender skipped goes out with the next."""
     with hub(STOP, bus=bus) as master, Viewer("stop_at_barrier", bus.endpoints) as viewer:
         master.start()
         viewer.watch("barrier/trigger/*", period=100.0)
@@ -97,7 +93,7 @@ def test_an_event_is_sent_whenever_it_fires_whatever_the_rate(bus):
 
 
 def test_a_body_slot_is_computed_only_while_someone_watches_it(bus):
-    with hub(STOP, bus=bus) as master:
+    with every_point(STOP, bus=bus) as master:
         bottle = next(c for c in master.plant.components if (c.obj, c.name) == ("bottle", "body"))
         master.start()
         assert "velocity" not in bottle.needed

@@ -1,6 +1,7 @@
 """Publish on change (`run.bus.publish: change`): a watched slot goes out only at the points where its
 value differs from the last sample sent; an event whenever it fires; a viewer that asks for a rate
-gets the current values at once.
+gets the current values at once. The runs go at the data plane's pace (tests/dataplane_support.py
+EveryPoint), so every point is compared.
 
     belt_ramp_fmu:  drive.logic.speed  0 ─ramp─► 0.5 ── holds ── barrier ─ramp─► 0 ── holds
                     hub ── plant/belt_ramp_fmu/drive/logic/{speed,running} ──► viewer (only changes)
@@ -9,11 +10,12 @@ import csv
 
 import pytest
 
-from hub.bus.session import Bus, wait_until
+from hub.bus.session import Bus
 from hub.live import Viewer
 from hub.bus.settings import BusSettings
 
-from .bus_support import BELT_FMU, hub
+from .bus_support import BELT_FMU
+from .dataplane_support import every_point, settle
 from .fmus.fmu_support import build
 from .helpers import ROOT
 
@@ -42,14 +44,6 @@ def changes(points):
     return [p for n, p in enumerate(points) if n == 0 or p[1] != points[n - 1][1]]
 
 
-def settle(master, condition):
-    """Let the hub take in what arrived (subscribers, requests) until `condition` holds."""
-    def check():
-        master.dataplane.update()
-        return condition()
-    assert wait_until(check, 5.0)
-
-
 def samples(viewer):
     """Every sample that arrives until none has come for a second (the run is over by then)."""
     out = []
@@ -59,7 +53,7 @@ def samples(viewer):
 
 
 def test_a_slot_goes_out_only_when_its_value_changed_and_an_event_whenever_it_fires(bus, tmp_path):
-    with hub(BELT_FMU, tmp_path, bus=bus) as master, Viewer(RUN, bus.endpoints) as viewer:
+    with every_point(BELT_FMU, tmp_path, bus=bus) as master, Viewer(RUN, bus.endpoints) as viewer:
         master.start()
         viewer.watch("drive/logic/*")
         viewer.watch("barrier/trigger/on_enter")
@@ -82,7 +76,7 @@ def test_a_slot_goes_out_only_when_its_value_changed_and_an_event_whenever_it_fi
 
 
 def test_a_viewer_that_asks_for_a_rate_gets_the_current_values_though_they_hold(bus, tmp_path):
-    with hub(BELT_FMU, tmp_path, bus=bus) as master, Viewer(RUN, bus.endpoints) as first, \
+    with every_point(BELT_FMU, tmp_path, bus=bus) as master, Viewer(RUN, bus.endpoints) as first, \
             Viewer(RUN, bus.endpoints) as second:
         master.start()
         first.watch("drive/logic/speed")

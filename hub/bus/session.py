@@ -94,29 +94,34 @@ def _configure_tls(config, tls: TlsSettings) -> None:
             config.insert_json5(f"transport/link/tls/{key}", json.dumps(value))
 
 
-# What every holder of a certificate signed by the authority may do under access control: watch
-# the data plane and the run, ask for rates. The control plane as a whole (serving logic: hello,
-# output, its token; commands) is for the common names listed, and the hub's own.
+# Under access control, watching — the data plane and the run, rate requests — is for the common
+# names listed in `watch` and `control`; the control plane as a whole (serving logic: hello, output,
+# its token; commands) for those in `control`; and both for the hub's own. A certificate signed by
+# the authority but not named gets a connection and nothing through it.
 _WATCH_KEYS = ["plant/*/**", "plant/*/@cosim/hub", "plant/*/@cosim/state", "plant/*/@cosim/command/result",
                "plant/*/@cosim/viewer/**"]
 _MESSAGES = ["put", "delete", "declare_subscriber", "query", "declare_queryable", "reply", "liveliness_token",
              "declare_liveliness_subscriber", "liveliness_query"]
 
 
-def _configure_access(config, control: tuple[str, ...], tls: TlsSettings) -> None:
+def _configure_access(config, control: tuple[str, ...], watch: tuple[str, ...], tls: TlsSettings) -> None:
     """Zenoh's access control, by certificate common name. A denied message is dropped without a
     word to its sender; the README says what that looks like."""
-    names = list(control)
+    controllers = list(dict.fromkeys(control))
     own = tls_common_name(tls.certificate) if tls.certificate else None
-    if own and own not in names:
-        names.append(own)   # the participants the hub launches present its certificate
-    acl = {"enabled": True, "default_permission": "deny",
-           "rules": [{"id": "watch", "permission": "allow", "messages": _MESSAGES, "key_exprs": _WATCH_KEYS},
-                     {"id": "control", "permission": "allow", "messages": _MESSAGES,
-                      "key_exprs": ["plant/*/@cosim/**"]}],
-           "subjects": [{"id": "anyone"}] + ([{"id": "controllers", "cert_common_names": names}] if names else []),
-           "policies": [{"rules": ["watch"], "subjects": ["anyone"]}] +
-                       ([{"rules": ["control"], "subjects": ["controllers"]}] if names else [])}
+    if own:
+        controllers = list(dict.fromkeys([*controllers, own]))   # the participants the hub launches present it
+    watchers = list(dict.fromkeys([*watch, *controllers]))
+    rules = [{"id": "watch", "permission": "allow", "messages": _MESSAGES, "key_exprs": _WATCH_KEYS},
+             {"id": "control", "permission": "allow", "messages": _MESSAGES, "key_exprs": ["plant/*/@cosim/**"]}]
+    subjects, policies = [], []
+    if watchers:
+        subjects.append({"id": "watchers", "cert_common_names": watchers})
+        policies.append({"rules": ["watch"], "subjects": ["watchers"]})
+    if controllers:
+        subjects.append({"id": "controllers", "cert_common_names": controllers})
+        policies.append({"rules": ["control"], "subjects": ["controllers"]})
+    acl = {"enabled": True, "default_permission": "deny", "rules": rules, "subjects": subjects, "policies": policies}
     config.insert_json5("access_control", json.dumps(acl))
 
 
@@ -161,7 +166,7 @@ class Bus:
             if tls is not None:
                 _configure_tls(config, tls)
             if settings.control is not None:
-                _configure_access(config, settings.control, tls)
+                _configure_access(config, settings.control, settings.watch, tls)
             zenoh_log.start()
             self._session = zenoh.open(config)
         except zenoh.ZError as exc:
@@ -278,10 +283,29 @@ class Publisher:
     def matching(self) -> bool:
         return self._pub.matching_status.matching
 
-    def on_matching(self, deliver) -> None:
-        """Call `deliver(bool)` whenever subscribers appear (True) or the last one goes (False)."""
-        self._bus._declare(lambda: self._pub.declare_matching_listener(lambda status: deliver(status.matching)),
-                           self.key)
+    def matching_changes(self) -> "MatchingChanges":
+        """Whether subscribers came or went, kept in Zenoh's own queue until asked: no Python runs in
+        Zenoh's threads. Measured in the bottling plant: a callback listener on each of 615 publishers
+        made the first viewer's arrival 615 callbacks, each waiting up to 5 ms for the GIL of a loop
+        stepping pybullet, and the first puts to that viewer waited on them."""
+        return MatchingChanges(self._bus._declare(
+            lambda: self._pub.declare_matching_listener(zenoh.handlers.RingChannel(4)), self.key))
+
+
+class MatchingChanges:
+    """A publisher's matching status changes, polled (60–90 µs for 615 of them, none pending)."""
+
+    __slots__ = ("_listener",)
+
+    def __init__(self, listener):
+        self._listener = listener
+
+    def latest(self) -> bool | None:
+        """The last status reported since the previous call, or None when nothing changed."""
+        status, latest = self._listener.try_recv(), None
+        while status is not None:
+            latest, status = status.matching, self._listener.try_recv()
+        return latest
 
 
 class Token:

@@ -52,8 +52,11 @@ def _print_run(run, args) -> None:
         print(f"  pacing       {pacer.summary()}")
     if link is not None and link.lockstep is not None:
         count = len(link.lockstep.peers)
+        plane = link.dataplane
+        skipped = f", {plane.skipped} points skipped by the data plane under load" if plane.skipped else ""
+        lost = f", {plane.outbox.events_lost} events lost" if plane.outbox.events_lost else ""
         print(f"  bus          {count} participant{'s' if count != 1 else ''}, "
-              f"{link.dataplane.samples} data-plane samples")
+              f"{plane.samples} data-plane samples{skipped}{lost}")
     if out is not None and (out / "commands.csv").is_file():
         print(f"  commands     {out / 'commands.csv'}")
 

@@ -71,8 +71,12 @@ class BusLink:
             return
         self._closed = True
         try:
-            if self.lockstep is not None:
-                self.lockstep.close(reason)
+            try:
+                if self.dataplane is not None:   # the last values go out before the run's state says stopped
+                    self.dataplane.close()
+            finally:
+                if self.lockstep is not None:
+                    self.lockstep.close(reason)
         finally:
             if self.own_bus:
                 self.bus.close()
