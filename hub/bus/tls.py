@@ -148,7 +148,7 @@ def refused(endpoint: str, tls: TlsSettings, timeout: float = 2.0) -> str | None
 
 
 def environment(tls: TlsSettings | None, *, loopback: bool) -> dict[str, str]:
-    """What a participant the hub launches is told (PLANTHUB_TLS_*, read by hub/participant.py):
+    """What a participant the hub launches is told (PLANTHUB_TLS_*, read by hub/bus/participant.py):
     the authority, and the hub's own certificate, which a process the hub started presents as its
     own. `loopback`: it connects only to the hub's listeners, by 127.0.0.1, a name the hub's
     certificate need not hold (the signature is checked all the same)."""
