@@ -218,10 +218,11 @@ def main() -> int:
     event_latency()
     plant_elements()
     flush_cost()
-    from .bench_bus import bus_lockstep, data_plane   # Zenoh: lockstep beside bare ping-pong, data plane
+    from .bench_bus import bus_lockstep, data_plane, watched_plant   # Zenoh: lockstep, data plane, watchers
 
     bus_lockstep()
     data_plane()
+    watched_plant()
     from .bench_bottling import bottling_plant   # the whole plant, 100 bottles on the line
 
     bottling_plant()
