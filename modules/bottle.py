@@ -36,6 +36,7 @@ from hub.core.module import Module
 from hub.core.slots import Slot
 
 from modules.params import POSITION, length
+from modules.plant import LOOK
 
 
 class BottleBody(Component):
@@ -101,6 +102,8 @@ def hull_points(profile) -> list[tuple[float, float, float]]:
 
 class Bottle(Module):
     """An upright bottle standing with the centre of its base at `position`."""
+
+    CONTRIBUTES = (LOOK,)   # its bottles look filled, capped (modules/plant/look.py)
 
     @classmethod
     def default_hull(cls, radius: float, height: float) -> list[tuple[float, float, float]]:

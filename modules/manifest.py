@@ -31,6 +31,12 @@ def cargo(world, body: int) -> Cargo:
     return entry
 
 
+def peek(world, body: int) -> Cargo | None:
+    """The entry of body number `body` if it has one, without making it (a view looks)."""
+    table = _TABLES.get(world)
+    return None if table is None else table.get(body)
+
+
 def register(world, body: int, destination: str = "") -> Cargo:
     """Make a fresh entry for a body (a source does this for every bottle it makes)."""
     entry = _TABLES.setdefault(world, {})[body] = Cargo(world.labels[body], destination)

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from hub.core.component import Component
 from hub.core.module import Module
 from hub.core.slots import Slot
-from modules.plant import FIGURES, ORDERS
+from modules.plant import FIGURES, LOOK, ORDERS
 
 from modules.manifest import cargo
 from modules.trigger import add_volume, volume_parameters
@@ -148,7 +148,7 @@ class Sink(Module):
     COMPONENTS = {"bin": Bin, "count": Count}
     PLANT = True
     TAKES_OUT = True
-    CONTRIBUTES = (FIGURES, ORDERS)
+    CONTRIBUTES = (FIGURES, ORDERS, LOOK)
 
     @staticmethod
     def count_slots(destinations) -> tuple[Slot, ...]:

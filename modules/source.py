@@ -31,7 +31,7 @@ from hub.core.component import Component
 from hub.core.errors import SimulationError
 from hub.core.module import Module
 from hub.core.slots import Slot
-from modules.plant import FIGURES
+from modules.plant import FIGURES, LOOK
 
 from modules.manifest import register
 from modules.params import POSITION, length
@@ -118,7 +118,7 @@ class Source(Module):
     }
     COMPONENTS = {"store": Store}
     PLANT = True
-    CONTRIBUTES = (FIGURES,)
+    CONTRIBUTES = (FIGURES, LOOK)
 
     @classmethod
     def check(cls, params):

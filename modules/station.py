@@ -36,6 +36,7 @@ from hub.core.slots import Slot
 
 from modules.manifest import cargo
 from modules.trigger import add_volume, volume_parameters
+from modules.plant import LOOK
 
 OPERATIONS = {"fill": "filled", "cap": "capped"}
 
@@ -106,6 +107,8 @@ class Process(Component):
 
 class Station(Module):
     """A filling or capping station: a box volume centred at `position`; `size` along, across and up."""
+
+    CONTRIBUTES = (LOOK,)   # its bottles look filled, capped (modules/plant/look.py)
 
     PARAMETERS = {
         "type": "object",

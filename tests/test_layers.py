@@ -21,9 +21,10 @@ ALLOWED = {
     "scenario": {"core", "bus"},
     "physics": {"core"},
     "logic": {"core", "bus"},
-    "run": {"core", "bus", "scenario", "physics", "logic"},
+    "view": {"core", "bus", "physics"},
+    "run": {"core", "bus", "scenario", "physics", "logic", "view"},
     "reports": {"core", "scenario", "physics", "run"},
-    "cli": {"core", "bus", "scenario", "physics", "logic", "run", "reports"},
+    "cli": {"core", "bus", "scenario", "physics", "logic", "run", "reports", "view"},
 }
 #: files at the top of hub/: the public names users write, and what each stands for
 TOP = {"__init__": {"run"}, "__main__": {"cli"}, "participant": {"bus"}, "live": {"bus"}}

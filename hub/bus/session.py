@@ -99,7 +99,8 @@ def _configure_tls(config, tls: TlsSettings) -> None:
 # its token; commands) for those in `control`; and both for the hub's own. A certificate signed by
 # the authority but not named gets a connection and nothing through it.
 _WATCH_KEYS = ["plant/*/**", "plant/*/@cosim/hub", "plant/*/@cosim/state", "plant/*/@cosim/command/result",
-               "plant/*/@cosim/viewer/**"]
+               "plant/*/@cosim/viewer/**", "plant/*/@cosim/scene", "plant/*/@cosim/bodies",
+               "plant/*/@cosim/events", "plant/*/@cosim/figures"]
 _MESSAGES = ["put", "delete", "declare_subscriber", "query", "declare_queryable", "reply", "liveliness_token",
              "declare_liveliness_subscriber", "liveliness_query"]
 
@@ -218,6 +219,33 @@ class Bus:
     def subscribe_payloads(self, key: str, deliver) -> None:
         """Call `deliver(payload bytes)` for every sample on `key`: the fast path of lockstep outputs."""
         self._declare(lambda: self._session.declare_subscriber(key, lambda s: deliver(s.payload.to_bytes())), key)
+
+    # --- queries -----------------------------------------------------------------------
+    def answer(self, key: str, reply, encoding: str) -> None:
+        """Answer every query on `key` with the bytes `reply()` gives at that moment (the scene
+        document: a late joiner asks for it at any time). Runs in a Zenoh thread: `reply` must be
+        cheap and must not wait (it returns bytes made already)."""
+        def respond(query):
+            try:
+                query.reply(key, reply(), encoding=zenoh.Encoding(encoding))
+            except zenoh.ZError:
+                pass   # the asker went away
+        self._declare(lambda: self._session.declare_queryable(key, respond), key)
+
+    def ask(self, key: str, timeout: float = 2.0) -> Message | None:
+        """The first answer to a query on `key` within `timeout` s, or None when nobody answers."""
+        with self._lock:
+            if self._session is None:
+                raise BusError(f"the bus is closed (asking {key})")
+            session = self._session
+        try:
+            replies = session.get(key, timeout=timeout)
+            for reply in replies:
+                if reply.ok is not None:
+                    return _message(reply.ok)
+        except zenoh.ZError as exc:
+            raise BusError(f"cannot ask {key}: {_cause(exc)}") from None
+        return None
 
     # --- liveliness --------------------------------------------------------------------
     def declare_token(self, key: str) -> "Token":

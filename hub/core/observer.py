@@ -49,3 +49,12 @@ class SummarySection(Protocol):
     def lines(self) -> list[str]: ...
 
     def as_dict(self) -> dict: ...
+
+
+@runtime_checkable
+class BodyLook(Protocol):
+    """What a view shows of the bodies beyond their poses (a bottle's fill and cap state, its
+    destination), contributed by the modules that know it (Module.CONTRIBUTES): `look(rows)` gives
+    map entries of the bodies message (schemas/scene.md), one value per row, in the rows' order."""
+
+    def look(self, rows: Sequence[int]) -> dict: ...

@@ -47,6 +47,9 @@ class Bodies:
         # are (None: every body): what the watch tests, without indexing the state again.
         self.fresh = np.zeros((0, 13))
         self.fresh_rows = None
+        # Bodies put into play since the last read, and where (their state arrays learn it at the
+        # next read): a view drawing between the two shows them there, not off stage.
+        self.placed: dict[int, tuple] = {}
 
     def check_open(self) -> None:
         """The body set is frozen at the first step (pybullet is deterministic only for an
@@ -72,6 +75,7 @@ class Bodies:
         # Parked and resting bodies are not read (their pose stands); all are after a park or unpark.
         if not self.ids:
             return
+        self.placed.clear()
         if self.stale:
             self.refresh()
         rows = None if self.full_read else self.live_rows

@@ -49,9 +49,10 @@ class Parking:
             self.engine.wake(b)
         self.bodies.parked.discard(body)
         self.rest.forget(body)
+        centre = (base[0], base[1], base[2] + half_heights[body])
+        self.bodies.placed[body] = centre
         if self.rest.resting.any():
             # The state arrays learn where it stands at the next read; what rests near it wakes now.
-            centre = (base[0], base[1], base[2] + half_heights[body])
             upright = boxes(np.array([(0.0, 0.0, 0.0, 1.0)]), self.bodies.radii[[body]], half_heights[[body]])
             self.sleep.wake_in([centre], upright)
         self.bodies.moved()

@@ -17,6 +17,7 @@ class SwitchableParts:
         self.sleep = sleep
         self._bodies: list[int] = []
         self._boxes: list[tuple] = []   # each part's bounding box (lo, hi), for waking what rests in it
+        self.solid: list[bool] = []     # each part's collision now (a view draws it so)
 
     def add(self, centers, half_extents, yaws, solid: bool) -> int:
         """One fixed body of boxes placed in the world frame; returns its number for `set_solid`."""
@@ -24,6 +25,7 @@ class SwitchableParts:
         self.engine.frictionless(body)
         self._bodies.append(body)
         self._boxes.append(self.engine.aabb(body))
+        self.solid.append(solid)
         self.set_solid(len(self._bodies) - 1, solid)
         return len(self._bodies) - 1
 
@@ -35,5 +37,6 @@ class SwitchableParts:
         if self.sleep.rest.resting.any():
             lo, hi = (np.asarray(v, float) for v in self._boxes[part])
             self.sleep.wake_in([(lo + hi) / 2.0], [(hi - lo) / 2.0])
+        self.solid[part] = solid
         group, mask = (2, -3) if solid else (0, 0)
         self.engine.call(pybullet.setCollisionFilterGroupMask, self._bodies[part], -1, group, mask)

@@ -76,9 +76,10 @@ class KinematicArm:
         self.tool_length = tool_length
         self._id = self._call(pybullet.loadURDF, f"{pybullet_data.getDataPath()}/{URDF}", list(base),
                               pybullet.getQuaternionFromEuler((0.0, 0.0, yaw)), useFixedBase=True)
-        limits = [self._call(pybullet.getJointInfo, self._id, j)[8:10] for j in range(JOINTS)]
-        self.lower = np.array([lo for lo, _ in limits])
-        self.upper = np.array([hi for _, hi in limits])
+        info = [self._call(pybullet.getJointInfo, self._id, j) for j in range(JOINTS)]
+        self.joint_names = [i[1].decode("utf-8") for i in info]
+        self.lower = np.array([i[8] for i in info])
+        self.upper = np.array([i[9] for i in info])
         for link in range(-1, JOINTS):
             self._call(pybullet.setCollisionFilterGroupMask, self._id, link, 0, 0)
         self._call(pybullet.changeDynamics, self._id, -1, activationState=pybullet.ACTIVATION_STATE_ENABLE_SLEEPING)

@@ -117,6 +117,11 @@ class VolumeTriggers:
         return ((gx * gx + gy * gy <= radii * radii)
                 & (np.abs(positions[:, 2] - centers[:, 2, None]) <= half_extents[:, 2, None] + half_heights))
 
+    def occupied(self) -> np.ndarray:
+        """Per trigger: whether a body is inside at the last evaluation."""
+        inside = self._inside
+        return inside.any(axis=1) if inside.shape[0] == len(self) else np.zeros(len(self), bool)
+
     def move(self, trigger: int, center) -> None:
         """Put a box's centre elsewhere (a gripper's trigger follows the tool)."""
         self.boxes.centers[trigger] = center

@@ -19,7 +19,8 @@ from hub.physics.parking import PARKED, Parking  # noqa: F401 (PARKED: read here
 from hub.physics.parts import SwitchableParts
 from hub.physics.placement import overlaps
 from hub.physics.rest import Rest
-from hub.physics.robot import REACH, SHOULDER, KinematicArm
+from hub.physics.robot import REACH, SHOULDER, URDF, KinematicArm
+from hub.physics.scene import SceneLog, SceneState, scene_state
 from hub.physics.sleep import Sleep
 from hub.physics.triggers import Latch, VolumeTriggers
 from hub.physics.watch import Watch
@@ -48,6 +49,7 @@ class PhysicsWorld:
     | `robots` | arms.py, robot.py | robot arms, gripped bodies and the triggers on their tools |
     | `rest`, `sleep` | rest.py, sleep.py | bodies at rest: the rule (numpy) and the engine's side |
     | `watch` | watch.py, placement.py | a run gone wrong: bodies too fast, non-finite or out of the box; overlaps at load |
+    | `scene` | scene.py | what was built and by which object, and the moving state, for a view |
 
     Each tick reads the state of every body in play once, except those at rest (asleep in the
     engine, their state stands); force fields and triggers work on those arrays with numpy,
@@ -107,6 +109,7 @@ class PhysicsWorld:
         self.robots = Arms(self._client, self.bodies, self.bottles, self.rest, self.sleep, self.triggers)
         self.watch = Watch(self.gravity)        # off until configured; hub/run/plant.py does, from run.watch
         self.warnings: list[str] = []           # what the checks at the start found doubtful (logged too)
+        self.scene = SceneLog()                 # what was built, by whom, as a view draws it (scene.py)
 
     # --- the body table, as the modules read it ---------------------------------------------
     @property
@@ -162,23 +165,31 @@ class PhysicsWorld:
     # --- building: static geometry, belts, bottles, triggers --------------------------------
     def add_static_box(self, center, half_extents, yaw: float = 0.0) -> None:
         self.engine.add_static_box(center, half_extents, yaw)
+        self.scene.box(center, half_extents, yaw)
 
     def add_static_boxes(self, centers, half_extents, yaws) -> None:
         self.engine.add_static_boxes(centers, half_extents, yaws)
+        for c, h, y in zip(centers, half_extents, yaws):
+            self.scene.box(c, h, y)
 
     def add_support(self, z: float, rect, thickness: float = 0.02) -> None:
         self.engine.add_support(z, rect, thickness)
+        self.scene.support(z, rect, thickness)
 
     def add_force_field(self, center, half_extents, yaw: float, k: float, speed: float) -> int:
-        return self.fields.add(center, half_extents, yaw, k, speed)
+        field = self.fields.add(center, half_extents, yaw, k, speed)
+        self.scene.field_box(field, center, half_extents, yaw)
+        return field
 
     def add_belt_field(self, line: Straight | Arc, half_width: float, z_lo: float, z_hi: float, k: float,
                        speed: float, grip: str = "surface", per_mass: bool = True,
                        friction: float | None = None) -> int:
         """A belt's force field; `friction` (μ) caps the acceleration it gives at μ·g."""
         limit = math.inf if friction is None else friction * self.gravity
-        return self.fields.add_region(line, half_width, z_lo, z_hi, k, speed, grip=grip, per_mass=per_mass,
-                                      limit=limit)
+        field = self.fields.add_region(line, half_width, z_lo, z_hi, k, speed, grip=grip, per_mass=per_mass,
+                                       limit=limit)
+        self.scene.belt(field, line, half_width, line.start.z)
+        return field
 
     def set_field_speed(self, field: int, speed: float) -> None:
         """A belt's speed; bodies resting on it wake when it changes."""
@@ -188,23 +199,31 @@ class PhysicsWorld:
         self.fields.set_speed(field, speed)
 
     def add_cylinder(self, base, radius: float, height: float, mass: float, label: str) -> int:
-        return self.bottles.add_cylinder(base, radius, height, mass, label)
+        row = self.bottles.add_cylinder(base, radius, height, mass, label)
+        self.scene.body(row)
+        return row
 
     def add_bottle(self, base, radius: float, height: float, mass: float, label: str, *, hull=None,
                    grip_at: str = "centre", base_fraction: float = 0.05) -> int:
         """An upright bottle standing on `base` (bottles.py; RING and MAXIMAL above)."""
-        return self.bottles.add(base, radius, height, mass, label, hull=hull, grip_at=grip_at,
-                                base_fraction=base_fraction, ring=self.RING, maximal=self.MAXIMAL)
+        row = self.bottles.add(base, radius, height, mass, label, hull=hull, grip_at=grip_at,
+                               base_fraction=base_fraction, ring=self.RING, maximal=self.MAXIMAL)
+        self.scene.body(row)
+        return row
 
     def add_trigger(self, center, half_extents, yaw: float = 0.0) -> int:
-        return self.triggers.add(center, half_extents, yaw)
+        trigger = self.triggers.add(center, half_extents, yaw)
+        self.scene.trigger(trigger, center, half_extents, yaw)
+        return trigger
 
     def take_trigger(self, trigger: int) -> Latch:
         return self.triggers.take(trigger)
 
     # --- plant elements: switchable and moving parts, parked bodies, robot arms --------------
     def add_switchable_boxes(self, centers, half_extents, yaws, solid: bool) -> int:
-        return self.parts.add(centers, half_extents, yaws, solid)
+        part = self.parts.add(centers, half_extents, yaws, solid)
+        self.scene.part(part, centers, half_extents, yaws)
+        return part
 
     def set_solid(self, part: int, solid: bool) -> None:
         self.parts.set_solid(part, solid)
@@ -212,7 +231,9 @@ class PhysicsWorld:
     def add_moving_boxes(self, centers, half_extents, yaws, axis) -> MovingPart:
         """A part of boxes (world frame, where it stands at offset 0) that slides along `axis`:
         `part.move(world.tick, [Leg(to, speed, hold), …])` (moving.py)."""
-        return self.moving.add(centers, half_extents, yaws, axis)
+        part = self.moving.add(centers, half_extents, yaws, axis)
+        self.scene.moving(len(self.moving.parts) - 1, centers, half_extents, yaws, axis)
+        return part
 
     def park(self, body: int) -> None:
         self.parking.park(body)
@@ -224,7 +245,9 @@ class PhysicsWorld:
         return body in self.bodies.parked
 
     def add_arm(self, base, yaw: float, tool_length: float) -> KinematicArm:
-        return self.robots.add(base, yaw, tool_length)
+        arm = self.robots.add(base, yaw, tool_length)
+        self.scene.arm(len(self.robots.arms) - 1, URDF, base, yaw, arm.joint_names, tool_length)
+        return arm
 
     def follow(self, trigger: int, arm: KinematicArm, offset) -> None:
         self.robots.follow(trigger, arm, offset)
@@ -244,6 +267,10 @@ class PhysicsWorld:
         if len(self.fields) == 0:   # a scene without belts (an arm over a table): no speed to look up
             return rows, field, np.zeros(len(rows))
         return rows, field, np.where(field >= 0, self.fields.speeds[field], 0.0)
+
+    def scene_state(self) -> SceneState:
+        """The bodies in play and the moving parts now, for a view (scene.py; no engine call)."""
+        return scene_state(self)
 
     # --- stepping -------------------------------------------------------------------------
     def start(self) -> None:

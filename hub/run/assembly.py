@@ -66,10 +66,11 @@ class Run:
             from hub.bus.commands import Commands, load_commands
             commands = Commands(plant, self.recorder, load_commands(replay, plant)) if replay is not None else None
             self.commands = commands
+            self.contributed = _contributions(scenario, plant)
             slaves = [s for c in plant.components if getattr(s := getattr(c, "slave", None), "on_bus", False)]
             if bus is not None or slaves:
-                self.link = BusLink(plant, self.recorder, slaves, bus, commands, log=self.log)
-            self.contributed = _contributions(scenario, plant)
+                self.link = BusLink(plant, self.recorder, slaves, bus, commands, log=self.log,
+                                    looks=self.contributed, figures=lambda: self.figures)
             watchers = [*self.contributed, *observers]
             self.master = Master(
                 plant,

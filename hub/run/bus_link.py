@@ -1,4 +1,4 @@
-"""The bus side of one run: the lockstep with its participants, the data plane and live operator commands."""
+"""The bus side of one run: the lockstep with its participants, the data plane, the view feed and live operator commands."""
 from __future__ import annotations
 
 import logging
@@ -9,6 +9,7 @@ from hub.bus.lockstep import Lockstep
 from hub.bus.session import Bus, local_endpoint
 from hub.bus.settings import BusSettings, exposure
 from hub.bus.wire import check_run_name
+from hub.view.broadcast import Broadcast
 
 _log = logging.getLogger(__name__)
 
@@ -24,7 +25,7 @@ class BusLink:
     """
 
     def __init__(self, plant, recorder, slaves: list, bus: Bus | None = None, commands: Commands | None = None,
-                 log=None):
+                 log=None, looks=(), figures=lambda: []):
         scenario = plant.scenario
         self.plant = plant
         self.recorder = recorder
@@ -33,7 +34,8 @@ class BusLink:
         self.bus = bus if bus is not None else Bus(scenario.run.bus or BusSettings())
         self.slaves = slaves
         self.commands = commands
-        self.dataplane = self.lockstep = None
+        self.dataplane = self.lockstep = self.view = None
+        self.looks, self.figures = looks, figures
         self._closed = False
 
     def start(self) -> Commands | None:
@@ -48,6 +50,7 @@ class BusLink:
         # Everything that listens is declared before the hub's liveliness token, which tells others
         # the hub is there: a put made before a subscription is known goes nowhere.
         self.dataplane = DataPlane(self.bus, run, plant, settings)
+        self.view = Broadcast(self.bus, run, plant, looks=self.looks, figures=self.figures)
         live = None
         if self.commands is None:
             live = self.commands = Commands(plant, self.recorder)
@@ -63,6 +66,7 @@ class BusLink:
 
     def observe(self, tick: int, signals, events) -> None:
         self.dataplane.publish(tick, signals)
+        self.view.observe(tick, signals, events)
         self.lockstep.poll()
 
     def close(self, reason: str = "closed") -> None:

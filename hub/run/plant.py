@@ -24,11 +24,13 @@ class Plant:
             self.objects: dict[str, DynamicObject] = {}
             self.components: list[Component] = []
             for spec in scenario.objects:
+                self.world.scene.owner = spec.name   # what it builds is its own in the scene (hub/physics/scene.py)
                 components = spec.module.build(spec.name, spec.params, self.world)
                 if spec.logic is not None:
                     components["logic"] = spec.logic_module.build(spec.name, spec.logic, self.world)["logic"]
                 self.objects[spec.name] = DynamicObject(spec.name, spec.module_name, components)
                 self.components.extend(components.values())
+            self.world.scene.owner = ""
             slots, self.index, local_indices = [], {}, []
             for comp in self.components:
                 local = {}

@@ -3,3 +3,4 @@
 #: What a plant element contributes to a run (hub/core/module.py CONTRIBUTES).
 FIGURES = "modules.plant.summary:PlantTally"
 ORDERS = "modules.plant.orders:Orders.for_plant"
+LOOK = "modules.plant.look:CargoLook"   # how bottles look in a view (hub/core/observer.py BodyLook)

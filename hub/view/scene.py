@@ -1,0 +1,37 @@
+"""The scene document (schemas/scene.schema.json): everything a view draws that does not move by
+itself — the objects with their modules and slots, the geometry each one built, every body's
+shape and id — made once, when the run starts.
+
+JSON rather than glTF: what a view needs is what the parts *are* (a belt's centre line, a
+switch's blade, a light barrier's volume, an arm's URDF and joint names, which object owns
+what), so that it can colour, label, light up and operate them; glTF would carry triangles and
+lose all of that, and the primitives (boxes, belt strips, cylinders) are a few lines to mesh.
+"""
+from __future__ import annotations
+
+import json
+
+FORMAT = "planthub-scene"
+VERSION = 1
+
+
+def scene_document(plant, run: str) -> dict:
+    """The scene of a built plant (hub/run/plant.py) whose world has started."""
+    world = plant.world
+    scene, b = world.scene, world.bodies
+    slots: dict[str, list] = {}
+    for ref, index in plant.index.items():
+        slot = plant.signals.slots[index]
+        slots.setdefault(ref.obj, []).append([f"{ref.component}.{ref.slot}", slot.type.value, slot.direction.value])
+    objects = {spec.name: {"module": spec.module_name, "slots": slots.get(spec.name, [])}
+               for spec in plant.scenario.objects}
+    bodies = [{"row": row, "id": b.labels[row], "object": scene.body_owners.get(row, ""),
+               "radius": float(b.radii[row]), "height": 2.0 * float(b.half_heights[row])}
+              for row in range(len(b.labels))]
+    return {"format": FORMAT, "version": VERSION, "run": run, "physics_rate": world.rate,
+            "objects": objects, "items": scene.items, "bodies": bodies}
+
+
+def scene_bytes(plant, run: str) -> bytes:
+    """The document as it goes on the bus: compact UTF-8 JSON."""
+    return json.dumps(scene_document(plant, run), separators=(",", ":"), allow_nan=False).encode("utf-8")
