@@ -6,6 +6,10 @@ point, recorded with its tick in `commands.csv`, and replayed from there bit for
   a flow had fed it.
 - `force SLOT VALUE`: the same at every point until `release SLOT`.
 - `stop`: the run ends after this point.
+- `pause`, `resume`, `step N` (N points, while paused), `pace F` (F × real time, a paced run):
+  the run's control (hub/run/hold.py). They change when points are computed, never what: a
+  replay ignores them and gives the same recording. While paused, they are taken at once; other
+  commands wait for the next point.
 
 A target read by its own component within the step (a constant's or connector's input) cannot
 be commanded: command the slot that feeds it.
@@ -25,7 +29,10 @@ from hub.core.registry import did_you_mean
 from hub.core.slots import Direction, SlotType
 from hub.bus import wire
 
-OPS = ("set", "force", "release", "stop")
+OPS = ("set", "force", "release", "stop", "pause", "resume", "step", "pace")
+CONTROL = ("pause", "resume", "step", "pace")   # the run's control: hub/run/hold.py
+MAX_STEPS = 100_000   # points one `step` may ask for
+MAX_PACE = 1000.0     # the fastest pace one may ask for, × real time
 
 
 class CommandError(PlanthubError):
@@ -41,6 +48,8 @@ class Command:
 
     def value_text(self, kind: SlotType | None) -> str:
         """The value as JSON (empty where there is none), exact for every double."""
+        if self.op in ("step", "pace"):
+            return json.dumps(self.value)
         if self.op in ("release", "stop") or kind in (None, SlotType.VOID):
             return ""
         return json.dumps(wire.to_wire(kind, self.value))
@@ -77,6 +86,9 @@ class Commands:
         self._own: dict[int, object] = {}
         self._released: dict[int, object] = {}
         self._once: list[tuple[int, object]] = []
+        self._waiting: list = []   # commands taken in while paused, applied at the next point
+        self._held_rows: list = []   # event-log rows of the control applied while paused (for the next point)
+        self.control = None        # the run's control (hub/run/hold.py Hold): pause, resume, step, pace
         self.stop_requested = False
 
     def stop(self, tick: int) -> Stop | None:
@@ -98,8 +110,19 @@ class Commands:
         op, by = message["op"], message.get("by", "")
         if not isinstance(by, str) or len(by) > MAX_NAME:
             raise CommandError(f"`by` must be a string of at most {MAX_NAME} characters, got {_shown(by)}")
-        if op == "stop":
-            return Command("stop", by=by)
+        if op in ("stop", "pause", "resume"):
+            return Command(op, by=by)
+        if op == "step":
+            count = message.get("value", 1)
+            if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= MAX_STEPS:
+                raise CommandError(f"step takes a number of points from 1 to {MAX_STEPS}, got {_shown(count)}")
+            return Command("step", value=count, by=by)
+        if op == "pace":
+            factor = message.get("value")
+            if isinstance(factor, bool) or not isinstance(factor, (int, float)) or not 0 < factor <= MAX_PACE:
+                raise CommandError(f"pace takes a factor of real time above 0 and at most {MAX_PACE:g}, "
+                                   f"got {_shown(factor)}")
+            return Command("pace", value=float(factor), by=by)
         name = message.get("slot")
         if not isinstance(name, str) or name not in self.slots:
             raise CommandError(f"no slot {_shown(name)}{self._nearest(name)}")
@@ -143,20 +166,19 @@ class Commands:
                     raise CommandError(f"the replayed command at tick {at} ({command.describe(None)} "
                                        f"{command.slot}) falls between two communication points of this run")
                 due.append(command)
-        elif not self._inbox.empty():
-            for payload in self._inbox.drain():
-                try:
-                    command = self.parse(wire.unpack(payload))
-                except (CommandError, wire.WireError) as exc:
-                    self._answer(payload, tick, str(exc))
-                    continue
-                due.append(command)
-                self._answer(payload, tick, None)
-        rows = []
+        else:
+            due, self._waiting = self._waiting, []
+            if not self._inbox.empty():
+                due += self._live(tick)
+        rows, self._held_rows = self._held_rows, []
         for command in due:
             kind = self.slots[command.slot][1].type if command.slot else None
             if command.op == "stop":
                 self.stop_requested = True
+            elif command.op in CONTROL:
+                # When points are computed is no part of the results: a replay records, and runs through.
+                if self._replay is None and self.control is not None:
+                    self.control.apply(command)
             else:
                 index = self.slots[command.slot][0]
                 if command.op == "set":
@@ -170,6 +192,42 @@ class Commands:
             self.recorder.command(tick, command.op, command.slot, command.value_text(kind), command.by)
             rows.append((tick, command.slot or "@run", command.describe(kind)))
         return rows
+
+    def _live(self, tick: int, first=()) -> list[Command]:
+        """The live commands waiting in the inbox (after those in `first`), checked and answered
+        (a refused one only answered)."""
+        due = []
+        for payload in [*first, *self._inbox.drain()]:
+            try:
+                command = self.parse(wire.unpack(payload))
+                if command.op in CONTROL:
+                    refused = (self.control.refuse(command) if self.control is not None else
+                               "this run has no control of its points (a replay, or no live commands)")
+                    if refused:
+                        raise CommandError(refused)
+            except (CommandError, wire.WireError) as exc:
+                self._answer(payload, tick, str(exc))
+                continue
+            due.append(command)
+            self._answer(payload, tick, None)
+        return due
+
+    def wait(self, tick: int, timeout: float) -> None:
+        """While the run is held at `tick`: wait up to `timeout` s for live commands. The run's
+        control among them is applied and recorded now (its event-log rows go out with the next
+        point), a stop ends the hold, the others wait for the next point."""
+        item = self._inbox.get(timeout)
+        if item is None:
+            return
+        for command in self._live(tick, [item]):
+            if command.op in CONTROL:
+                self.control.apply(command)
+                self.recorder.command(tick, command.op, "", command.value_text(None), command.by)
+                self._held_rows.append((tick, "@run", command.describe(None)))
+            else:
+                self._waiting.append(command)
+                if command.op == "stop":
+                    self.stop_requested = True   # a stop ends a held run at once
 
     def _answer(self, payload: bytes, tick: int, error: str | None) -> None:
         if self._results is None:

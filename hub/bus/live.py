@@ -76,6 +76,17 @@ class Viewer:
             if time.monotonic() >= deadline and not self.hub_alive:
                 raise PlanthubError(f"no hub for run {self.run!r} within {timeout:g} s")
 
+    def wait_state(self, state: str, timeout: float = 10.0) -> dict:
+        """Wait until the run's state (schemas/wire.md `state`) is `state`; returns the state map."""
+        deadline = time.monotonic() + timeout
+        while self.state.get("state") != state:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise PlanthubError(f"run {self.run!r} not {state} within {timeout:g} s "
+                                    f"(it is {self.state.get('state', 'unknown')})")
+            self._handle(self._control.get(min(left, 0.1)))
+        return self.state
+
     def command(self, op: str, slot: str = "", value=None, *, by: str = "", wait: float | None = 5.0):
         """Send a command. With `wait` (s), return the hub's answer, a map {id, ok, tick, error}, once the
         command was applied or refused at a communication point; without, return its id (see `answer`)."""

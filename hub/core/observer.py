@@ -55,6 +55,6 @@ class SummarySection(Protocol):
 class BodyLook(Protocol):
     """What a view shows of the bodies beyond their poses (a bottle's fill and cap state, its
     destination), contributed by the modules that know it (Module.CONTRIBUTES): `look(rows)` gives
-    map entries of the bodies message (schemas/scene.md), one value per row, in the rows' order."""
+    map entries of the bodies message (schemas/scene.schema.json `bodies_message`), one value per row, in the rows' order."""
 
     def look(self, rows: Sequence[int]) -> dict: ...

@@ -11,6 +11,7 @@ from hub.logic.watchdog import WATCHDOG
 from hub.run.bus_link import BusLink
 from hub.run.interruption import Interruption
 from hub.run.ending import ending
+from hub.run.hold import Hold
 from hub.run.master import Master, RunResult
 from hub.run.plant import Plant
 from hub.run.recorder import Recorder
@@ -95,6 +96,8 @@ class Run:
                 if live is not None:
                     self.commands = live
                     self.master.manipulators.append(live)
+                    self.master.hold = Hold(live, pacer=self.master.pacer, state=self.link.lockstep.publish_state,
+                                            idle=self.link.idle)
             if self.commands is not None:   # an operator's stop, live or replayed
                 self.master.stops.append(self.commands)
         except BaseException:

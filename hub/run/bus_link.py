@@ -69,6 +69,11 @@ class BusLink:
         self.view.observe(tick, signals, events)
         self.lockstep.poll()
 
+    def idle(self) -> None:
+        """While the run is held (an operator's pause): participants' news taken in, views kept fresh."""
+        self.lockstep.poll()
+        self.view.idle(self.plant.world.tick)
+
     def close(self, reason: str = "closed") -> None:
         """Tell participants the run is over, stop the processes it launched, close a bus it opened."""
         if self._closed:

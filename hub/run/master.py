@@ -65,17 +65,19 @@ class Master:
     The master knows no plant element, transport or file: what records, publishes, tallies or
     judges a run is an Observer, what ends it early a StopCondition, what sets slots from outside
     (operator commands, a replay) a manipulator (hub/core/observer.py); the run assembly
-    (hub/run/assembly.py) plugs them in. A pacer holds each point until its wall-clock time.
+    (hub/run/assembly.py) plugs them in. A pacer holds each point until its wall-clock time, and
+    an operator's hold (pause, single steps) keeps the run at a point until it is resumed.
     """
 
     def __init__(self, plant: Plant, *, observers: list[Observer] = (), stops: list[StopCondition] = (),
-                 manipulators=(), pacer=None):
+                 manipulators=(), pacer=None, hold=None):
         self.plant = plant
         self.world = plant.world
         self.observers = list(observers)
         self.stops = list(stops)
         self.manipulators = list(manipulators)   # take(tick) -> events, apply(signals, direction)
         self.pacer = pacer
+        self.hold = hold   # hub/run/hold.py: an operator's pause, resume and single steps
         self._closed = False
         self.stopped: Stop | None = None   # set, the run is over (an operator's stop, its orders delivered)
         comps = plant.components
@@ -167,6 +169,9 @@ class Master:
                 if pacer is not None:
                     pacer.wait(self.world.tick)
                 stop = self.stop_now()
+                if stop is None and self.hold is not None and self.hold.holding():
+                    self.hold.wait(self.world.tick, self.stop_now)
+                    stop = self.stop_now()
         except BaseException:
             self.close("the run failed")
             raise

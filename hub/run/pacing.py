@@ -24,6 +24,7 @@ class Pacer:
     worst: float = 0.0             # s: the latest a point came
     points: int = 0
     _anchor: tuple = field(default=None, repr=False)   # (wall time, tick) the schedule counts from
+    _last: int = field(default=0, repr=False)          # the tick of the last point paced
 
     def __post_init__(self):
         if not self.factor > 0:
@@ -31,6 +32,15 @@ class Pacer:
 
     def start(self, tick: int) -> None:
         self._anchor = (self.clock(), tick)
+        self._last = tick
+
+    def set_factor(self, factor: float) -> None:
+        """A new pace (an operator's `pace`), counted from the last point paced."""
+        if not (isinstance(factor, (int, float)) and factor > 0):
+            raise ValueError(f"a real-time factor must be positive, got {factor!r}")
+        self.factor = float(factor)
+        if self._anchor is not None:
+            self._anchor = (self.clock(), self._last)
 
     def due(self, tick: int) -> float:
         wall, start = self._anchor
@@ -42,6 +52,7 @@ class Pacer:
             self.start(tick)
             return
         self.points += 1
+        self._last = tick
         now = self.clock()
         late = now - self.due(tick)
         if late > self.tolerance:

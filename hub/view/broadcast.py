@@ -1,5 +1,5 @@
 """The hub's side of a view: the scene on a queryable, and — while someone subscribes — every body's
-pose, the parts' state, the event log and the plant's figures (schemas/scene.md).
+pose, the parts' state, the event log and the plant's figures (schemas/scene.schema.json `bodies_message`).
 
 An observer (hub/core/observer.py) of the run, part of its bus link. What it sends is small and
 goes out with congestion control *drop*, so a slow view loses messages, never holds the loop:
@@ -80,6 +80,17 @@ class Broadcast:
         if self._figures_watched and now >= self._next_figures:
             self._next_figures = now + FIGURES_EVERY
             self._figure_pub.put(wire.pack(self.figures_message(tick, now)))
+
+    def idle(self, tick: int) -> None:
+        """The run is held at `tick`: a view that joins meanwhile gets the bodies, about every POLL s."""
+        now = time.perf_counter()
+        if now >= self._next_poll:
+            watched = self._watched
+            self._poll(now)
+            if self._watched and (not watched or self._due <= tick):
+                self._bodies.put(wire.pack(self.message(tick)))
+                self.sent += 1
+                self._due = tick + self.period
 
     def close(self, reason: str = "") -> None:
         """Nothing to flush: a view that missed the last message asks the run's state."""

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from modules.manifest import peek
 
-FILLED, CAPPED = 1, 2   # bits of `flags` in the bodies message (schemas/scene.md)
+FILLED, CAPPED = 1, 2   # bits of `flags` in the bodies message (schemas/scene.schema.json `bodies_message`)
 
 
 class CargoLook:
