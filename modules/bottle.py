@@ -6,10 +6,12 @@
 | body.orientation | quat   | source | orientation (x, y, z, w), every step            |
 | body.velocity    | vec3   | source | linear velocity, m/s, every step                |
 | body.tilt        | real   | source | angle between its axis and the plumb line, deg  |
+| body.present     | bool   | source | on stage (false once a sink took it out)        |
 | tag.id           | string | source | the id an ID reader reads, every step           |
 
 Body slots are computed only when a flow or the recording reads them: a bottle nobody watches
-costs its physics and nothing more.
+costs its physics and nothing more. Off stage (taken out by a sink) its pose slots keep the
+last values they had on stage and `present` is false: gone, not somewhere below the plant.
 
 Level of detail, per bottle (`model`, `shape`):
 
@@ -40,11 +42,16 @@ from modules.plant import LOOK
 
 
 class BottleBody(Component):
+    """A bottle's body. While it is off stage (a sink took it out, a source still holds it) its
+    pose slots keep the last values they had on stage and `present` is false: it is gone, not
+    somewhere far below the plant."""
+
     SLOTS = (
         Slot.source("position", "vec3", "centre of mass, m"),
         Slot.source("orientation", "quat", "orientation quaternion (x, y, z, w)"),
         Slot.source("velocity", "vec3", "linear velocity, m/s"),
         Slot.source("tilt", "real", "angle between axis and plumb line, degrees"),
+        Slot.source("present", "bool", "on stage: false before a source released it and after a sink took it"),
     )
 
     def __init__(self, obj, name, world, body):
@@ -54,6 +61,11 @@ class BottleBody(Component):
 
     def sense(self, tick):
         w, b, needed = self.world, self.body, self.needed
+        present = not w.is_parked(b)
+        if "present" in needed:
+            self.emit("present", present)
+        if not present:
+            return
         if "position" in needed:
             self.emit("position", tuple(w.positions[b].tolist()))
         if "orientation" in needed:

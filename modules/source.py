@@ -20,9 +20,16 @@ read per tick, so a full store costs next to nothing. A release puts the next bo
 and at rest, on the spot — once nothing stands within a bottle's width of it, so it is never
 put into another bottle. One release is pending at most: commands while one waits are merged.
 With `interval`, the source also releases by itself every `interval` seconds from `start`.
+
+Each bottle is addressable by its id as an object of its own with a bottle's body slots
+(`M001.body.position`, `body.orientation`, `body.velocity`, `body.tilt`, `body.present`) in
+`record:`, expectations and flows from it; computed only when one of those reads it, and not on
+the data plane (every body's pose is in the bodies message, schemas/scene.schema.json). Before
+its release and after a sink took it, `present` is false and its pose holds.
 """
 from __future__ import annotations
 
+import re
 import zlib
 
 import numpy as np
@@ -33,8 +40,20 @@ from hub.core.module import Module
 from hub.core.slots import Slot
 from modules.plant import FIGURES, LOOK
 
+from modules.bottle import BottleBody
 from modules.manifest import register
 from modules.params import POSITION, length
+
+
+_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")   # an object name (schemas/scenario.schema.json)
+
+
+class Member(BottleBody):
+    """A released bottle's body (Module.members): computed only for the slots something reads,
+    and not on the data plane (all bodies' poses are in the bodies message)."""
+
+    QUIET_UNLESS_NEEDED = True
+    PUBLISHED = False
 
 
 class Store(Component):
@@ -157,6 +176,14 @@ class Source(Module):
         return [(f"{prefix}{i + 1:0{width}d}", names[k]) for i, k in enumerate(drawn.tolist())]
 
     @classmethod
+    def members(cls, name, params):
+        """Each bottle, by its id, with the slots of a bottle's body (`B007.body.position`): for
+        `record:`, expectations and flows. Their poses are on the bus in the bodies message
+        (schemas/scene.schema.json), not as slots. An id that is no object name is not addressable."""
+        return {ident: {"body": BottleBody.SLOTS} for ident, _ in cls.bottles(name, params, 0)
+                if _NAME.match(ident)}
+
+    @classmethod
     def build(cls, name, params, world):
         spot = tuple(float(v) for v in params["position"])
         r, h = params["radius"], params["height"]
@@ -171,8 +198,10 @@ class Source(Module):
             register(world, body, destination)
             bodies.append(body)
             destinations.append(destination)
+        members = {f"{world.labels[b]}.body": Member(world.labels[b], "body", world, b) for b in bodies
+                   if _NAME.match(world.labels[b])}
         every = first = None
         if "interval" in params:
             every = max(1, round(params["interval"] * world.rate))
             first = round(params["start"] * world.rate)
-        return {"store": Store(name, "store", world, spot, bodies, destinations, 2 * r, every, first)}
+        return {"store": Store(name, "store", world, spot, bodies, destinations, 2 * r, every, first), **members}

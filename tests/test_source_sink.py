@@ -75,3 +75,41 @@ def test_a_release_waits_while_the_spot_is_taken(write_scenario, tmp_path):
     assert 0.9 < released[1] < 1.1 and released[2] == pytest.approx(1.5 + 1 / 150)
     assert any(r["source.store.waiting"] == "1" for r in data)
     assert data[-1]["source.store.remaining"] == "0"
+
+
+def test_a_released_bottle_is_addressable_by_its_id_and_gone_once_taken(tmp_path):
+    """`P1.body.position` names the first bottle the source releases (Module.members): recorded,
+    judged by an expectation and fed by a flow; off stage its pose holds and `present` is false."""
+    overrides = {"record": ["P1.body.position", "P1.body.present"],
+                 "expect": [{"name": "P1 stands", "slot": "P1.body.tilt", "always": {"<": 5}}]}
+    from hub.run.assembly import Run
+    from hub.scenario.expectations import Watcher
+
+    scenario = load_scenario(SCENARIO, overrides)
+    with Run(scenario, out=tmp_path) as run:
+        watcher = Watcher(scenario.expect, run.plant.index, scenario.run.physics_rate)
+        run.master.observers.append(watcher)
+        run.run()
+    [outcome] = watcher.judge()
+    assert outcome.passed, outcome
+    table = rows(tmp_path / "recording.csv")
+    present = [r["P1.body.present"] for r in table]
+    first, last = present.index("1"), len(present) - 1 - present[::-1].index("1")
+    assert present[:first] == ["0"] * first and set(present[first:last + 1]) == {"1"}
+    assert present[last + 1:] and set(present[last + 1:]) == {"0"}, "taken by the sink: gone"
+    # On stage it rides the belt; once gone its pose holds where the sink took it, never off stage.
+    xs = [float(r["P1.body.position.x"]) for r in table]
+    assert xs[first] < 0.1 and xs[last] > 1.8
+    assert xs[last + 1:] == [xs[last]] * (len(xs) - last - 1)
+
+
+def test_a_bottle_id_that_clashes_with_an_object_is_an_error(tmp_path):
+    from hub.core.errors import ScenarioError
+
+    text = SCENARIO.read_text().replace("  sink: {module: sink", "  P2: {module: constant, type: int, value: 1}\n  sink: {module: sink")
+    path = tmp_path / "clash.yaml"
+    path.write_text(text)
+    with pytest.raises(ScenarioError) as caught:
+        load_scenario(path)
+    assert "object 'source' makes 'P2', a name object 'P2' has already: rename one of them" in str(caught.value)
+    assert "clash.yaml:" in str(caught.value)

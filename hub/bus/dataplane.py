@@ -66,6 +66,8 @@ class DataPlane:
         self._matching = []      # (entry, its publisher's matching changes), polled every POLL s at most
         self._next_poll = 0.0
         for ref, index in plant.index.items():
+            if not owners[(ref.obj, ref.component)].PUBLISHED:
+                continue
             if not any(fnmatch.fnmatchcase(str(ref), p) or fnmatch.fnmatchcase(f"{ref.obj}.{ref.component}", p)
                        or fnmatch.fnmatchcase(ref.obj, p) for p in settings.expose):
                 continue

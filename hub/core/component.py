@@ -20,6 +20,11 @@ class Component:
     SLOTS: ClassVar[tuple[Slot, ...]] = ()
     #: (target, source) pairs where the target's value reaches the source within the same step.
     FEEDTHROUGH: ClassVar[tuple[tuple[str, str], ...]] = ()
+    #: Its `sense` computes only the sources something reads: with none, the master skips it (a
+    #: source's 150 bottles, addressable by id, cost nothing unless a scenario reads one).
+    QUIET_UNLESS_NEEDED: ClassVar[bool] = False
+    #: Its slots are on the data plane (hub/bus/dataplane.py); False keeps them off it.
+    PUBLISHED: ClassVar[bool] = True
 
     def __init__(self, obj: str, name: str):
         self.obj = obj

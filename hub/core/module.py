@@ -48,6 +48,13 @@ class Module:
         return {name: comp.SLOTS for name, comp in cls.COMPONENTS.items()}
 
     @classmethod
+    def members(cls, name: str, params: dict) -> dict[str, dict[str, tuple[Slot, ...]]]:
+        """Objects an instance makes beside itself, addressable by their own names in `record:`,
+        expectations and flows (a source's bottles, by id): member name → component name → slots.
+        `build` returns their components too, with the member's name as their object."""
+        return {}
+
+    @classmethod
     def feedthrough(cls, params: dict) -> dict[str, tuple[tuple[str, str], ...]]:
         """Component name → its (target, source) pairs that pass within one step."""
         return {name: comp.FEEDTHROUGH for name, comp in cls.COMPONENTS.items() if comp.FEEDTHROUGH}

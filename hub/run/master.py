@@ -83,7 +83,8 @@ class Master:
         comps = plant.components
         # Only components that do something in a hook are called: a scene of 100 bottles should
         # not pay 200 empty calls per communication step.
-        self._sensing = [c for c in comps if type(c).sense is not Component.sense]
+        self._sensing = [c for c in comps if type(c).sense is not Component.sense
+                         and not (c.QUIET_UNLESS_NEEDED and not c.needed)]
         self._actuating = [c for c in comps if type(c).actuate is not Component.actuate]
         self._emitters = [c for c in comps if _may_emit(c)]
         self.communicated = False

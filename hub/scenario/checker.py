@@ -47,7 +47,7 @@ def load_scenario(path, overrides: dict | None = None, registry: Registry | None
     if data is None:
         raise ScenarioError(problems)
     problems += _apply_overrides(data, overrides or {}, str(path))
-    problems += _non_finite(data, (), lines, str(path))
+    problems += _unfit_numbers(data, (), lines, str(path))
     checker = _Checker(path, data, lines, registry or default_registry())
     checker.problems[:0] = problems
     # A value already reported (not finite, an unknown tag) is not judged again by the schema.
@@ -55,18 +55,29 @@ def load_scenario(path, overrides: dict | None = None, registry: Registry | None
     return checker.check()
 
 
-def _non_finite(node, path: tuple, lines: Lines, file: str) -> list[Problem]:
-    """Every NaN or infinity in the document, reported at its place and replaced by None: no
-    number of a scenario may be non-finite (JSON Schema's `number` would take them)."""
+#: The largest magnitude of a scenario's numbers: the integers a double holds exactly. Beyond it
+#: an integer loses digits as a float, and products of such numbers (ticks from seconds, a step's
+#: ticks) overflow to infinity, where the checker would fail converting them back.
+LARGEST = 2 ** 53
+
+
+def _unfit_numbers(node, path: tuple, lines: Lines, file: str) -> list[Problem]:
+    """Every NaN, infinity or number beyond ±LARGEST in the document, reported at its place and
+    replaced by None: no number of a scenario may be non-finite (JSON Schema's `number` would
+    take them) or out of that range."""
     found = []
     items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
     for key, value in list(items):
+        message = None
         if isinstance(value, float) and not math.isfinite(value):
-            found.append(Problem(file, line_of(lines, path + (key,)), format_path(path + (key,)),
-                                 f"{value!r} is not a finite number"))
+            message = f"{value!r} is not a finite number"
+        elif isinstance(value, (int, float)) and not isinstance(value, bool) and abs(value) > LARGEST:
+            message = f"{value!r} is out of range: a scenario's numbers stay within ±2**53 (about 9.0e15)"
+        if message is not None:
+            found.append(Problem(file, line_of(lines, path + (key,)), format_path(path + (key,)), message))
             node[key] = None
         elif isinstance(value, (dict, list)):
-            found += _non_finite(value, path + (key,), lines, file)
+            found += _unfit_numbers(value, path + (key,), lines, file)
     return found
 
 
@@ -92,6 +103,8 @@ def _resolve_paths(params: dict, schema: dict, base: Path) -> dict:
     for key, prop in schema.get("properties", {}).items():
         if prop.get("x-path") and isinstance(out.get(key), str):
             out[key] = str((base / out[key]).resolve())
+        elif "properties" in prop and isinstance(out.get(key), dict):   # a section: `tls: {certificate, key}`
+            out[key] = _resolve_paths(out[key], prop, base)
     return out
 
 
@@ -296,6 +309,12 @@ class _Checker:
             if logic is not None:
                 slots.update(logic_module.slots(logic))
             tables[name] = {(comp, s.name): s for comp, group in slots.items() for s in group}
+            for member, groups in module.members(name, params).items():
+                if member in specs or member in tables:
+                    self.problem(at, f"object {name!r} makes {member!r}, a name object "
+                                     f"{member!r} has already: rename one of them")
+                    continue
+                tables[member] = {(comp, s.name): s for comp, group in groups.items() for s in group}
         self.broken = set(specs) - set(tables)   # objects already reported: their slots are not judged
         return objects, tables
 

@@ -1,0 +1,20 @@
+// The page's test hooks (view spec, addendum): `window.planthub`, read by the browser test to
+// see what the page saw and drew without scraping pixels. The contract keys are connected,
+// frames, tick, bodies(), events and figures; hello, state, scene and results are extras.
+
+export function installHooks(bodiesNow) {
+  const hooks = {
+    connected: false,   // the WebSocket is open
+    frames: 0,          // frames rendered (renderer.render calls)
+    tick: -1,           // tick of the newest bodies message received; -1 before the first
+    bodies: () => bodiesNow(),   // {"<id>": [x, y, z]}: drawn, interpolated positions of the bodies in play
+    events: [],         // every [tick, slot, detail] row seen, oldest first
+    figures: null,      // the last figures map {tick, time, wall, rtf, sections}
+    hello: null,        // the hello message
+    state: null,        // the last state map {state, tick, time, reason}
+    scene: null,        // the scene document drawn
+    results: [],        // command results {id, ok, tick, error}, oldest first
+  };
+  window.planthub = hooks;
+  return hooks;
+}
