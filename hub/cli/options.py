@@ -32,8 +32,11 @@ def add_set(parser: argparse.ArgumentParser) -> None:
 
 
 def overrides(args) -> dict:
-    """The --set options as a scenario's overrides: dotted key → value."""
-    return {key: value for key, value, _ in args.overrides}
+    """The --set options (and --record-bodies) as a scenario's overrides: dotted key → value."""
+    found = {key: value for key, value, _ in args.overrides}
+    if getattr(args, "record_bodies", False):
+        found.setdefault("run.record_bodies", True)
+    return found
 
 
 def set_texts(args) -> list[str]:
@@ -71,6 +74,9 @@ def add_run_arguments(parser: argparse.ArgumentParser, out_help: str) -> None:
                         help="pace the run to the wall clock (FACTOR× real time, default 1) and report overruns")
     parser.add_argument("--replay", type=Path, metavar="RUN_DIR",
                         help="apply the operator commands recorded in RUN_DIR/commands.csv at their ticks")
+    parser.add_argument("--record-bodies", action="store_true",
+                        help="record every body's pose at every point for playback (`planthub view RUN_DIR`; "
+                             "as run.record_bodies: true)")
     bus = parser.add_argument_group("bus (any of these opens it; they override the scenario's run.bus)")
     bus.add_argument("--bus", action="store_true", help="open the bus even if the scenario has no run.bus")
     bus.add_argument("--listen", action="append", metavar="ENDPOINT", help="listen on, e.g. tcp/0.0.0.0:7447")

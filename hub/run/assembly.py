@@ -68,6 +68,12 @@ class Run:
             commands = Commands(plant, self.recorder, load_commands(replay, plant)) if replay is not None else None
             self.commands = commands
             self.contributed = _contributions(scenario, plant)
+            self.bodies = None   # the body recording, for playback (run.record_bodies)
+            if self.out is not None and scenario.run.record_bodies:
+                from hub.view.bodies_file import BodyRecorder   # pyarrow is loaded only for it
+                from hub.view.scene import scene_bytes
+                self.bodies = BodyRecorder(self.out, plant.world, scene_bytes(plant, scenario.name),
+                                           every=scenario.run.record_bodies, looks=self.contributed)
             slaves = [s for c in plant.components if getattr(s := getattr(c, "slave", None), "on_bus", False)]
             if bus is not None or slaves:
                 self.link = BusLink(plant, self.recorder, slaves, bus, commands, log=self.log,
@@ -75,7 +81,7 @@ class Run:
             watchers = [*self.contributed, *observers]
             self.master = Master(
                 plant,
-                observers=[self.recorder, *([self.link] if self.link else []),
+                observers=[self.recorder, *([self.bodies] if self.bodies else []), *([self.link] if self.link else []),
                            *[c for c in watchers if isinstance(c, Observer)]],
                 stops=[*[c for c in self.contributed if isinstance(c, StopCondition)], *stops],
                 manipulators=[commands] if commands is not None else [],
@@ -161,6 +167,8 @@ class Run:
         says why. The stuck main thread is inside a call and touches neither."""
         self.failure = SimulationError(message)
         self.recorder.close(message)
+        if self.bodies is not None:
+            self.bodies.close(message)
         if self.out is not None:
             self.summary().write(self.out / "summary.json")
         for peer in (self.link.lockstep.peers.values() if self.link and self.link.lockstep else ()):
@@ -172,7 +180,7 @@ class Run:
         if getattr(self, "interruption", None) is not None:
             self.interruption.close(reason)
         try:
-            for part in (getattr(self, "link", None), getattr(self, "recorder", None)):
+            for part in (getattr(self, "link", None), getattr(self, "bodies", None), getattr(self, "recorder", None)):
                 if part is not None:
                     part.close(reason)
         finally:

@@ -174,9 +174,12 @@ class _Checker:
             raise ScenarioError(self.problems)
         return self.build()
 
-    def validate(self, data, schema: dict, at: tuple) -> None:
+    def validate(self, data, schema: dict, at: tuple) -> bool:
+        """Report what `data` breaks of `schema`; whether it broke anything, a value already
+        reported while reading (a NaN, now None) included."""
         validator = jsonschema.Draft202012Validator(schema)
-        for error in sorted(validator.iter_errors(data), key=lambda e: [str(p) for p in e.absolute_path]):
+        errors = sorted(validator.iter_errors(data), key=lambda e: [str(p) for p in e.absolute_path])
+        for error in errors:
             where = at + tuple(error.absolute_path)
             self.rejected.append(where)
             if error.validator == "additionalProperties":
@@ -187,6 +190,7 @@ class _Checker:
                 self.problem(where, error.message.replace("is a required property", "is missing"))
             else:
                 self.problem(where, error.message)
+        return bool(errors)
 
     # --- meaning --------------------------------------------------------------------------
     def build(self) -> Scenario:
@@ -237,7 +241,18 @@ class _Checker:
             bus=self.bus_settings(run["bus"]) if isinstance(run.get("bus"), dict) else None,
             max_speed=float(watch["max_speed"]) if type(watch.get("max_speed")) in (int, float)
             and watch["max_speed"] > 0 else None,
-            on_violation=watch.get("on_violation") if watch.get("on_violation") in ("stop", "remove") else "stop")
+            on_violation=watch.get("on_violation") if watch.get("on_violation") in ("stop", "remove") else "stop",
+            record_bodies=self.body_period(run.get("record_bodies"), rate, substeps))
+
+    @staticmethod
+    def body_period(value, rate: int, substeps: int) -> int:
+        """`run.record_bodies` in ticks: true every point, a number of seconds rounded to points (at
+        least one); 0 for false or a bad value (the schema reports it)."""
+        if value is True:
+            return substeps
+        if type(value) in (int, float) and value > 0 and math.isfinite(value):
+            return max(1, round(value * rate / substeps)) * substeps
+        return 0
 
     def orders(self, run: RunSettings, objects) -> None:
         """`run.orders` needs sinks to deliver to, and no more orders than the sources put out."""
@@ -283,10 +298,8 @@ class _Checker:
                 continue
             own = {k: v for k, v in spec.items() if k not in ("module", "logic")}
             params = {**defaults.get(spec["module"], {}), **own}
-            before = len(self.problems)
-            self.validate(params, module.PARAMETERS, at)
-            if len(self.problems) > before:
-                continue
+            if self.validate(params, module.PARAMETERS, at):
+                continue   # its meaning is not judged on parameters of the wrong shape
             params = _resolve_paths(module.with_defaults(params), module.PARAMETERS, self.path.parent)
             logic = self.logic(at, module, spec["module"], spec.get("logic"), params)
             if logic is None and spec.get("logic") is not None:
@@ -329,10 +342,7 @@ class _Checker:
             self.problem(at + ("logic",), f"expected `default` or a mapping of {', '.join(LOGIC_OPTIONS['properties'])}, "
                                           f"got {value!r}")
             return None
-        before = len(self.problems)
-        if isinstance(value, dict):
-            self.validate(value, LOGIC_OPTIONS, at + ("logic",))
-        if len(self.problems) > before:
+        if isinstance(value, dict) and self.validate(value, LOGIC_OPTIONS, at + ("logic",)):
             return None
         if value == "default" and not module.LOGIC.default_file.is_file():
             self.problem(at + ("logic",), f"the default logic of {module_name!r}, {module.LOGIC.default_file}, "

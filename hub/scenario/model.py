@@ -25,6 +25,7 @@ class RunSettings:
     bus: BusSettings | None = None   # None: no `run.bus` section
     max_speed: float | None = None   # run.watch.max_speed, m/s; None: from the fastest belt (hub/physics/watch.py)
     on_violation: str = "stop"       # run.watch.on_violation: "stop" the run, or "remove" the body and log it
+    record_bodies: int = 0           # ticks between two points of the body recording (hub/view/bodies_file.py); 0: none
 
     @property
     def dt(self) -> float:
