@@ -4,14 +4,44 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 SCENARIO ?= scenarios/bottling_plant.yaml
+# make view: the run's name (its scenario's name, here its file's), where its hub listens, the page's port
+RUN       ?= $(basename $(notdir $(SCENARIO)))
+VIEW_BUS  ?= tcp/127.0.0.1:7447
+VIEW_PORT ?= 8765
+VIEW_STAMP := build/view/.built
+VIEW_SOURCES := hub/view/web/package-lock.json hub/view/web/package.json hub/view/web/build.mjs \
+                hub/view/web/index.html $(shell find hub/view/web/src -type f 2>/dev/null)
+CHROMIUM := /usr/bin/chromium
 
-.PHONY: run test bench fmus venv clean clean-venv
+.PHONY: run test bench fmus venv view view-assets chromium clean clean-venv
 
-run: $(STAMP) fmus
+run: $(STAMP) fmus view-assets
 	$(PY) -m hub run $(SCENARIO)
 
-test: $(STAMP) fmus
+test: $(STAMP) fmus view-assets chromium
 	$(PY) -m pytest
+
+# The bottling plant at real time with its view beside it: open the address it prints. Ctrl-C ends both
+# (each gets it; the run writes its files and summary so far); when the view fails, the run is ended too.
+view: $(STAMP) fmus view-assets
+	@$(PY) -m hub run $(SCENARIO) --realtime --listen $(VIEW_BUS) & hub=$$!; \
+	$(PY) -m hub view $(RUN) --connect $(VIEW_BUS) --port $(VIEW_PORT); status=$$?; \
+	case $$status in 130|143) ;; *) kill -TERM $$hub 2>/dev/null ;; esac; \
+	wait $$hub; exit $$status
+
+# The browser front-end of `planthub view` (hub/view/web/, esbuild) into build/view/: rebuilt only
+# when its lock file, its build script or its sources change.
+view-assets: $(VIEW_STAMP)
+
+$(VIEW_STAMP): $(VIEW_SOURCES)
+	cd hub/view/web && npm ci --no-audit --no-fund && npm run build
+	touch $@
+
+# The browser the view's test drives (Playwright launches it; it never downloads one of its own).
+chromium: $(CHROMIUM)
+
+$(CHROMIUM):
+	apt-get update && apt-get install -y --no-install-recommends chromium
 
 bench: $(STAMP) fmus
 	$(PY) -m tests.bench

@@ -16,6 +16,7 @@ from hub.live import Viewer
 from hub.run.plant import Plant
 from hub.run.recorder import Recorder
 from hub.bus.settings import BusSettings
+from hub.core.slots import SlotType
 from hub.scenario.checker import load_scenario
 
 from .bus_support import BELT_FMU, hub, same_files
@@ -170,3 +171,34 @@ def test_bad_commands_are_named(commands, message, error):
     with pytest.raises(CommandError) as info:
         commands.parse(message)
     assert str(info.value) == error
+
+
+
+def test_a_slot_watched_while_a_point_without_it_is_under_way_goes_out_after_it(bus):
+    """The sender's next due tick follows the slots watched now: a slot that was cold (computed
+    only once watched) is left out of the point under way, its first point is skipped while that
+    one is sent, and it must go out at the next. (It once took its due tick from the point under
+    way, which held no slot, and never offered another.)"""
+    from hub.bus.dataplane import _Exposed
+    from hub.bus.outbox import Outbox
+    from hub.core.slots import SlotRef
+
+    viewer = Bus(BusSettings(mode="client", connect=bus.endpoints), listen=False)
+    got = []
+    try:
+        viewer.subscribe("plant/x/belt/drive/velocity", got.append)
+        publisher = bus.publisher("plant/x/belt/drive/velocity", "planthub/real", lossy=True)
+        assert wait_until(lambda: publisher.matching, 5)
+        entry = _Exposed(SlotRef("belt", "drive", "velocity"), publisher.key, 0, SlotType.REAL, publisher, None)
+        outbox = Outbox(on_change=False)
+        try:
+            assert outbox.offer(3, [0.5], (), ())                  # the slot was cold at this point
+            assert not outbox.offer(6, [0.5], (entry,), ())        # the sender has not taken the first
+            assert outbox.flush(2.0)
+            assert outbox.wanted <= 9, "the watched slot is due at the next point"
+            assert outbox.offer(9, [0.5], (entry,), ()) and outbox.flush(2.0)
+        finally:
+            outbox.close()
+        assert wait_until(lambda: got, 5), "its sample arrives"
+    finally:
+        viewer.close()

@@ -57,6 +57,7 @@ class Outbox:
         self.sent_tick = -1      # the tick of the last point sent completely
         self._lock = threading.Lock()
         self._pending = None     # (tick, values, entries) handed over, not taken yet
+        self._latest = ()        # the entries of the last point offered, taken or skipped
         self._current = None     # [tick, values, entries, position]: the point being sent
         self._welcome = 0        # points still to send for viewers that came: lent the whole budget
         self._events: list = []  # (tick, entry) of void slots that fired, not sent yet
@@ -90,6 +91,11 @@ class Outbox:
                     self.events_lost += len(fired) - room
                     fired = fired[:room]
                 self._events.extend((tick, e) for e in fired)
+            if values is not None:
+                # What is due next follows the entries watched now, not those of the point under
+                # way: a point skipped here may hold entries the one being sent did not have (a
+                # slot that was cold at that point), and they must not wait for ever.
+                self._latest = entries
             if values is None or self._current is not None or self._pending is not None:
                 return values is None
             self._pending = (tick, values, entries)
@@ -190,7 +196,7 @@ class Outbox:
                     self._current = None
                     self._welcome = max(0, self._welcome - 1)
                     self.sent_tick = tick
-                    wanted = min((e.due for e in entries), default=NEVER)
+                    wanted = min((e.due for e in self._latest), default=NEVER)
                     self.wanted = 0 if self._resets else wanted
 
     def _send(self, current, deadline: float) -> bool:

@@ -1,4 +1,4 @@
-"""Command line: `planthub run|validate|test|describe|check-fmu|report|serve-fmu|send` (also `python -m hub`)."""
+"""Command line: `planthub run|validate|test|describe|check-fmu|report|plot|serve-fmu|send|view` (also `python -m hub`)."""
 from __future__ import annotations
 
 import argparse
@@ -13,7 +13,9 @@ from hub.cli.describe import describe
 from hub.cli.exits import BAD_SCENARIO, FAILED, INTERRUPTED, OK, TABLE, USAGE, UsageError
 from hub.cli.logs import diagnostics
 from hub.cli.options import add_run_arguments, add_set, overrides, verbosity, verbosity_parent
+from hub.cli.plot import add_command as add_plot_command
 from hub.cli.running import run_command, test_command
+from hub.cli.view import add_command as add_view_command
 from hub.core.errors import PlanthubError, ScenarioError
 
 _log = logging.getLogger(__name__)
@@ -102,7 +104,9 @@ def parser() -> tuple[argparse.ArgumentParser, dict]:
 
     handlers = {"run": run_command, "validate": _validate, "test": test_command,
                 "describe": lambda args: describe(args.module), "check-fmu": _check_fmu, "report": _report,
-                **add_bus_commands(sub, parents=loud, formatter=_FORMAT, epilog=TABLE)}
+                **add_bus_commands(sub, parents=loud, formatter=_FORMAT, epilog=TABLE),
+                "view": add_view_command(sub, parents=loud, formatter=_FORMAT, epilog=TABLE),
+                "plot": add_plot_command(sub, parents=loud, formatter=_FORMAT, epilog=TABLE)}
     return top, handlers
 
 

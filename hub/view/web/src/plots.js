@@ -1,14 +1,14 @@
 // The live plots: belt speeds from the "slots" messages (the view server watches every
-// `*/drive/speed`), bottles delivered and on the line and the throughput from the figures.
+// `*/drive/velocity`), bottles delivered and on the line and the throughput from the figures.
 
 import { Chart } from './chart.js';
 
 const REDRAW_MS = 250;   // plots change slowly; redrawing every frame would cost for nothing
 
-/** "feed.drive.speed" → "feed" (the usual belt drive), "lane.spur.speed" → "lane.spur". */
+/** "feed.drive.velocity" → "feed" (the usual belt drive), "lane.spur.velocity" → "lane.spur". */
 function beltName(key) {
   const parts = key.split('.');
-  if (parts.at(-1) === 'speed') parts.pop();
+  if (parts.at(-1) === 'velocity') parts.pop();
   if (parts.length === 2 && parts[1] === 'drive') parts.pop();
   return parts.join('.');
 }
@@ -33,11 +33,11 @@ export class Plots {
   slots(message) {
     const t = (message.tick ?? 0) / this.rate;
     for (const [key, v] of Object.entries(message.values ?? {})) {
-      if (!key.endsWith('.speed')) continue;
+      if (!key.endsWith('.velocity')) continue;
       this.speeds.add(beltName(key), t, v);
       const object = key.split('.')[0];
       // An object with several belts has one stripe speed: its `drive`'s, else the first seen.
-      if (key === `${object}.drive.speed` || !this.latest.has(object)) this.latest.set(object, v);
+      if (key === `${object}.drive.velocity` || !this.latest.has(object)) this.latest.set(object, v);
     }
   }
 

@@ -1,0 +1,110 @@
+"""`planthub view`: a browser's window on a running plant — join its run over the bus and serve the page."""
+from __future__ import annotations
+
+import argparse
+import asyncio
+import importlib.util
+import logging
+import signal
+from pathlib import Path
+
+from hub.cli.exits import UsageError
+
+_log = logging.getLogger("planthub.view")
+
+
+def add_command(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str = ""):
+    """The `view` subcommand; returns its handler."""
+    from hub.bus.participant import add_tls_options
+
+    view = sub.add_parser(
+        "view", parents=parents, formatter_class=formatter,
+        help="watch and operate a running plant in the browser (3D scene, operator panel, figures)",
+        description="Join a running plant over the bus as a live participant and serve its view to the browser:\n"
+                    "the plant in 3D with its bottles moving, an operator panel (stop and start belts, force\n"
+                    "sensors and switches, pause and step the run), the plant's figures and event log. Prints\n"
+                    "the address to open. The run must be on the bus: `planthub run SCENARIO --listen ENDPOINT`.",
+        epilog="example:\n  planthub view bottling_plant --connect tcp/127.0.0.1:7447 --open\n"
+               "      (beside `planthub run scenarios/bottling_plant.yaml --realtime --listen tcp/127.0.0.1:7447`)\n\n"
+               + epilog)
+    view.add_argument("run", help="the run's name (its scenario's name), as `planthub run` printed it")
+    view.add_argument("--connect", action="append", required=True, metavar="ENDPOINT",
+                      help="the hub's endpoint (its --listen), e.g. tcp/127.0.0.1:7447; repeatable")
+    view.add_argument("--mode", default="peer", choices=["peer", "client"],
+                      help="peer: connect to the hub itself; client: through a Zenoh router (or a router hub)")
+    view.add_argument("--port", type=_port, default=8765, help="the web port (default 8765; 0: any free one)")
+    view.add_argument("--host", default="127.0.0.1",
+                      help="the address to serve on (default 127.0.0.1: this machine only; the view has no login, "
+                           "whoever reaches it can command the plant)")
+    view.add_argument("--open", action="store_true", help="open the page in the default browser")
+    view.add_argument("--name", metavar="NAME",
+                      help="this view's name on the bus, logged as the sender of its commands (default view-<random>)")
+    view.add_argument("--no-control", action="store_true",
+                      help="only watch: the page's operator panel is disabled and no command is sent")
+    view.add_argument("--timeout", type=float, default=30.0, metavar="S",
+                      help="s to wait for the hub to answer (default 30)")
+    view.add_argument("--bundle", type=Path, metavar="DIR",
+                      help="the built front-end (default: build/view/, made by `make view-assets`)")
+    add_tls_options(view)
+    view.set_defaults(command_parser=view)
+    return lambda args: _view(view, args)
+
+
+def _terminated(signum, frame):
+    raise SystemExit(128 + signum)
+
+
+def _port(text: str) -> int:
+    try:
+        port = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a port number, got {text!r}") from None
+    if not 0 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"a port is from 0 to 65535, got {port}")
+    return port
+
+
+def _view(parser, args) -> int:
+    from hub.bus.participant import tls_settings
+    from hub.bus.wire import WireError, check_run_name
+
+    if Path(args.run).is_dir() or "/" in args.run:
+        raise UsageError(f"{args.run} names a folder: `planthub view` joins a running plant by its run's name "
+                         "(`planthub view bottling_plant --connect tcp/127.0.0.1:7447`); the playback of a "
+                         "recorded run folder is not built yet")
+    try:
+        check_run_name(args.run)
+        if args.name:
+            check_run_name(args.name)
+    except WireError as exc:
+        raise UsageError(str(exc)) from None
+    if not args.timeout > 0:
+        parser.error(f"--timeout needs a positive number of seconds, got {args.timeout:g}")
+    tls = tls_settings(parser, args)
+    if importlib.util.find_spec("aiohttp") is None:   # said here, not as a traceback in the middle of joining
+        raise UsageError("planthub view needs aiohttp: pip install -r requirements.txt")
+
+    from hub.view.http import BUNDLE, is_loopback
+    from hub.view.relay import Relay
+    from hub.view.server import serve
+
+    if not is_loopback(args.host):
+        _log.warning("planthub view: warning: serving on %s, beyond this machine: the view has no login, so whoever "
+                     "reaches that address can watch the plant and command it (--no-control: watch only)", args.host)
+
+    def announce(url: str) -> None:
+        print(f"planthub view: run {args.run!r} at {url}  (open it in a browser; Ctrl-C ends the view)", flush=True)
+
+    opened = None
+    if args.open:
+        import webbrowser
+
+        opened = webbrowser.open
+    signal.signal(signal.SIGTERM, _terminated)   # until the view's loop takes the signals over
+    relay = Relay(args.run, args.connect, mode=args.mode, tls=tls, name=args.name)   # a BusError: exit 1
+    try:
+        return asyncio.run(serve(relay, host=args.host, port=args.port, bundle=args.bundle or BUNDLE,
+                                 control=not args.no_control, reason="this view was started with --no-control",
+                                 timeout=args.timeout, announce=announce, opened=opened))
+    finally:
+        relay.close()

@@ -1,0 +1,123 @@
+"""The view's web side (aiohttp): the built front-end, the robot's files from pybullet_data, and a WebSocket per browser on /ws.
+
+Files are served only from inside their folder: a path that leaves it (`..`, an absolute path, a
+link pointing out) is not found, like a file that is not there. The WebSocket takes only pages of
+its own origin — another site open in the same browser must not command the plant — and, while
+the view listens on loopback, only requests addressed to a loopback name (a page of another site
+whose name was made to point at 127.0.0.1 sends its own name).
+"""
+from __future__ import annotations
+
+import asyncio
+import ipaddress
+from pathlib import Path
+from urllib.parse import urlsplit
+
+from aiohttp import WSMsgType, web
+
+from hub.core import resources
+from hub.view.browser import Browser
+from hub.view.frames import MAX_FRAME, frame
+
+#: the front-end, as `make view-assets` builds it from hub/view/web/
+BUNDLE = resources.ROOT / "build" / "view"
+HEARTBEAT = 10.0   # s between pings: a browser that went away without closing is noticed within two
+WRITER_LIMIT = 64 * 1024   # bytes aiohttp buffers for a socket before a send waits (and the next bodies frame waits)
+
+
+def missing_bundle(bundle: Path) -> str | None:
+    """What to do when the front-end is not built, or None when it is."""
+    if (bundle / "index.html").is_file():
+        return None
+    return (f"the view's front-end is not built (no {bundle / 'index.html'}): build it with `make view-assets` "
+            "(cd hub/view/web && npm ci && npm run build), then reload the page")
+
+
+def application(view, bundle: Path = BUNDLE, *, loopback: bool = True) -> web.Application:
+    """The web application of `view` (hub/view/server.py's View), its front-end read from `bundle`."""
+    import pybullet_data   # a folder of robot and mesh files: the URDF the scene names (no pybullet call)
+
+    data = Path(pybullet_data.getDataPath())
+    app = web.Application()
+
+    async def index(request: web.Request) -> web.StreamResponse:
+        problem = missing_bundle(bundle)
+        if problem:
+            return web.Response(status=503, text=f"planthub view: {problem}\n")
+        return web.FileResponse(bundle / "index.html", headers={"Cache-Control": "no-cache"})
+
+    async def assets(request: web.Request) -> web.StreamResponse:
+        return _inside(bundle / "assets", request.match_info["path"])
+
+    async def robots(request: web.Request) -> web.StreamResponse:
+        return _inside(data, request.match_info["path"])
+
+    async def socket(request: web.Request) -> web.StreamResponse:
+        refused = _refused(request, loopback)
+        if refused:
+            raise web.HTTPForbidden(text=f"planthub view: {refused}\n")
+        ws = web.WebSocketResponse(heartbeat=HEARTBEAT, max_msg_size=MAX_FRAME, compress=False,
+                                   writer_limit=WRITER_LIMIT)
+        await ws.prepare(request)
+        browser = Browser(ws, request.remote or "")
+        writer = asyncio.get_running_loop().create_task(browser.write())
+        view.attach(browser)
+        try:
+            async for message in ws:
+                if message.type is WSMsgType.TEXT:
+                    view.receive(browser, message.data)
+                elif message.type is WSMsgType.BINARY:
+                    browser.send(frame("error", error="expected a JSON text frame, got a binary one"))
+        finally:
+            view.detach(browser)
+            browser.closing = True
+            writer.cancel()
+            await asyncio.gather(writer, return_exceptions=True)
+        return ws
+
+    async def no_icon(request: web.Request) -> web.StreamResponse:
+        return web.Response(status=204)   # a browser asks for it whatever the page says
+
+    app.router.add_get("/", index)
+    app.router.add_get("/favicon.ico", no_icon)
+    app.router.add_get("/index.html", index)
+    app.router.add_get("/assets/{path:.+}", assets)
+    app.router.add_get("/pybullet_data/{path:.+}", robots)
+    app.router.add_get("/ws", socket)
+    return app
+
+
+def _inside(root: Path, relative: str) -> web.StreamResponse:
+    """The file at `relative` under `root`, or 404 when it is not there or not inside."""
+    try:
+        base = root.resolve(strict=True)
+        path = (base / relative).resolve(strict=True)
+    except (OSError, RuntimeError, ValueError):   # missing, a link loop, a NUL byte
+        raise web.HTTPNotFound() from None
+    if not path.is_relative_to(base) or not path.is_file():
+        raise web.HTTPNotFound()
+    return web.FileResponse(path)
+
+
+_LOOPBACK_NAMES = {"localhost", "localhost."}
+
+
+def is_loopback(host: str) -> bool:
+    host = host.strip("[]")
+    if host.lower() in _LOOPBACK_NAMES:
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def _refused(request: web.Request, loopback: bool) -> str | None:
+    """Why this WebSocket request is refused (another site's page), or None."""
+    host = request.headers.get("Host", "")
+    if loopback and not is_loopback(urlsplit(f"//{host}").hostname or ""):
+        return f"this view answers requests for 127.0.0.1 or localhost, not for {host[:80]!r}"
+    origin = request.headers.get("Origin")
+    if origin is not None and urlsplit(origin).netloc.lower() != host.lower():
+        return f"a page of {origin[:80]!r} may not use this view's WebSocket (its origin is http://{host[:80]})"
+    return None

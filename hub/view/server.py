@@ -1,0 +1,324 @@
+"""The `planthub view` process: the relay (bus side) and the web side on one asyncio loop, until SIGINT or SIGTERM.
+
+    hub ── scene (query), bodies, events, figures, state, results, belt speeds ──► relay ─► View ─► browsers
+    hub ◄── command, rate requests ──────────────────────────────────────────────── relay ◄─ View ◄─ browsers
+
+The master never waits for the view: the hub sends with congestion control drop, the relay's
+callbacks only hand payloads to the loop (hub/view/bridge.py), and each browser has its own
+bounded writer (hub/view/browser.py). Puts on the bus, which may block while Zenoh is congested,
+run on one thread of their own, in order.
+"""
+from __future__ import annotations
+
+import asyncio
+import logging
+import signal
+import time
+from collections import OrderedDict, deque
+from concurrent.futures import ThreadPoolExecutor
+
+from hub.bus import wire
+from hub.core.errors import PlanthubError
+from hub.view import frames
+from hub.view.bridge import Bridge
+from hub.view.relay import SPEEDS_PERIOD, Relay, ViewError, slot_sample
+
+_log = logging.getLogger("planthub.view")
+
+SCENE_ASK = 1.0          # s one query for the scene waits for an answer
+SCENE_RETRY = 0.25       # s between two queries nobody answered
+ANSWER_TIMEOUT = 10.0    # s a browser waits for the hub's answer to its command before it is told there is none
+MAX_IN_FLIGHT = 64       # commands of all browsers waiting to go on the bus
+MAX_PENDING = 256        # commands waiting for their answer (older ones are forgotten)
+KEPT_EVENTS = 500        # event rows a browser that connects late is given
+SLOTS_FLUSH = 0.05       # s the belt speeds of one point are gathered before they go to the browsers
+SHUTDOWN = 3.0           # s the web side has to close its sockets at the end
+
+
+class View:
+    """What every browser is told and what they ask for, between one Relay and the browsers' sockets."""
+
+    def __init__(self, relay: Relay, *, control: bool = True, reason: str = ""):
+        self.relay = relay
+        self.run = relay.run
+        self.loop = asyncio.get_running_loop()
+        self.browsers: set = set()
+        self.hello = frames.frame("hello", run=self.run, control=control, reason="" if control else reason,
+                                  viewer=relay.name)
+        self.control = control
+        self.scene: str | None = None          # the scene frame, once the hub answered
+        self.state = self.figures = None      # the last frames of each, for a browser that comes late
+        self.bodies: bytes | None = None
+        self.events: deque = deque(maxlen=KEPT_EVENTS)
+        self.hub_alive = self._hub_seen = False
+        self.bodies_period: float | None = None   # the last rate a browser asked for
+        self._pending: OrderedDict[str, tuple] = OrderedDict()   # command id → (browser, op, slot, ref)
+        self._count = 0
+        self._in_flight = 0
+        self._slots: dict = {}
+        self._slots_tick = None
+        self._flush = None
+        self._puts = ThreadPoolExecutor(1, thread_name_prefix="planthub-view-bus")
+        self._tasks: set = set()
+        self._malformed: set[str] = set()
+        self._closed = False
+        self.skipped = 0   # bodies frames not sent to a browser that was still busy with the one before
+
+    # --- from the bus (via the bridge, on the loop) ---------------------------------------
+    def deliver(self, kind: str, item) -> None:
+        try:
+            getattr(self, f"_on_{kind}")(item)
+        except PlanthubError as exc:   # a WireError: junk on a key of the run must not end the view
+            if kind not in self._malformed:
+                self._malformed.add(kind)
+                _log.warning("planthub view: a malformed %s message from the bus (%s); such messages are dropped",
+                             kind, exc)
+
+    def _on_bodies(self, payload: bytes) -> None:
+        self.bodies = payload
+        for browser in self.browsers:
+            browser.send_bodies(payload)
+
+    def _on_figures(self, payload: bytes) -> None:
+        self.figures = self._broadcast("figures", self._map(payload, "figures"))
+
+    def _on_state(self, payload: bytes) -> None:
+        self.state = self._broadcast("state", self._map(payload, "state"))
+
+    def _on_events(self, payload: bytes) -> None:
+        rows = wire.unpack(payload)
+        if not isinstance(rows, list):
+            raise wire.WireError(f"events: expected an array of rows, got {type(rows).__name__}")
+        self.events.extend(rows)
+        self._broadcast("events", {"rows": rows})
+
+    def _on_result(self, payload: bytes) -> None:
+        result = self._map(payload, "command result")
+        sent = self._pending.pop(result.get("id"), None)
+        extra = {"op": sent[1], "slot": sent[2], "ref": sent[3]} if sent else {}
+        self._broadcast("result", {**result, **extra})
+
+    def _on_slot(self, message) -> None:
+        name, value, tick = slot_sample(message)
+        if self._slots and tick != self._slots_tick:
+            self._flush_slots()
+        self._slots[name], self._slots_tick = value, tick
+        if self._flush is None:
+            self._flush = self.loop.call_later(SLOTS_FLUSH, self._flush_slots)
+
+    def _flush_slots(self) -> None:
+        if self._flush is not None:
+            self._flush.cancel()
+            self._flush = None
+        if self._slots:
+            self._broadcast("slots", {"tick": self._slots_tick, "values": self._slots})
+            self._slots = {}
+
+    def _on_hub(self, alive: bool) -> None:
+        if alive == self.hub_alive:
+            return
+        self.hub_alive = alive
+        self._broadcast("hub", {"alive": alive})
+        if not alive:
+            _log.warning("planthub view: the hub of run %r went away (%s); waiting for it", self.run, self.relay.where)
+            return
+        # The hub declares its subscribers before its token: a rate request put now reaches it.
+        self._put(self.relay.rate, self.relay.speeds, SPEEDS_PERIOD)
+        if self.bodies_period is not None:
+            self._put(self.relay.rate, wire.control_key(self.run, "bodies"), self.bodies_period)
+        if self._hub_seen:   # it came back: maybe another run of the same name, with another scene
+            _log.warning("planthub view: the hub of run %r is back", self.run)
+            self._spawn(self._refetch())
+        self._hub_seen = True
+
+    async def _refetch(self) -> None:
+        try:
+            scene = await fetch_scene(self.relay, 10.0, lambda: self.hub_alive)
+        except ViewError as exc:
+            _log.warning("planthub view: %s", exc)
+            return
+        self.scene = self._broadcast("scene", {"scene": scene})
+
+    # --- from the browsers ---------------------------------------------------------------
+    def attach(self, browser) -> None:
+        self.browsers.add(browser)
+        browser.send(self.hello)
+        if self.scene is not None:
+            browser.send(self.scene)
+        browser.send(frames.frame("hub", alive=self.hub_alive))
+        for text in (self.state, self.figures):
+            if text is not None:
+                browser.send(text)
+        if self.events:
+            browser.send(frames.frame("events", rows=list(self.events)))
+        if self.bodies is not None:
+            browser.send_bodies(self.bodies)
+
+    def detach(self, browser) -> None:
+        self.browsers.discard(browser)
+        self.skipped += browser.dropped
+
+    def receive(self, browser, text) -> None:
+        try:
+            request = frames.parse(text)
+        except frames.FrameError as exc:
+            browser.send(frames.frame("error", error=str(exc)))
+            return
+        if isinstance(request, frames.RateRequest):
+            self.bodies_period = request.period
+            if self.hub_alive:
+                self._put(self.relay.rate, wire.control_key(self.run, "bodies"), request.period)
+            return
+        self._command(browser, request)
+
+    def _command(self, browser, request: frames.CommandRequest) -> None:
+        def refuse(why: str) -> None:
+            browser.send(frames.frame("error", error=why, op=request.op, slot=request.slot, ref=request.ref))
+
+        if not self.control:
+            return refuse("this view only watches (it was started with --no-control): the command was not sent")
+        if not self.hub_alive:
+            return refuse(f"the hub of run {self.run!r} is not there ({self.relay.where}): the command was not sent")
+        if self._in_flight >= MAX_IN_FLIGHT:
+            return refuse(f"{MAX_IN_FLIGHT} commands are still waiting to go out: the command was not sent")
+        self._count += 1
+        ident = f"{self.relay.name}-{self._count}"
+        self._pending[ident] = (browser, request.op, request.slot, request.ref)
+        while len(self._pending) > MAX_PENDING:
+            self._pending.popitem(last=False)
+        self._put(self.relay.command, request.op, request.slot, request.value, ident,
+                  failed=lambda exc: refuse(f"the command could not be sent: {exc}"))
+        self.loop.call_later(ANSWER_TIMEOUT, self._unanswered, ident)
+
+    def _unanswered(self, ident: str) -> None:
+        sent = self._pending.pop(ident, None)
+        if sent is not None:
+            browser, op, slot, ref = sent
+            browser.send(frames.frame("error", id=ident, op=op, slot=slot, ref=ref,
+                                      error=f"no answer from the hub of run {self.run!r} within "
+                                            f"{ANSWER_TIMEOUT:g} s (is the run going?)"))
+
+    # --- helpers ----------------------------------------------------------------------------
+    def _broadcast(self, kind: str, body: dict) -> str:
+        text = frames.frame(kind, body)
+        for browser in self.browsers:
+            browser.send(text)
+        return text
+
+    @staticmethod
+    def _map(payload: bytes, what: str) -> dict:
+        message = wire.unpack(payload)
+        if not isinstance(message, dict):
+            raise wire.WireError(f"{what}: expected a map, got {type(message).__name__}")
+        return message
+
+    def _put(self, function, *args, failed=None) -> None:
+        """`function(*args)` on the bus thread, in order; `failed(exc)` on the loop if it raised."""
+        self._in_flight += 1
+        future = self.loop.run_in_executor(self._puts, function, *args)
+
+        def done(f) -> None:
+            self._in_flight -= 1
+            if f.cancelled():
+                return
+            exc = f.exception()
+            if exc is not None:
+                _log.warning("planthub view: %s", exc)
+                if failed is not None:
+                    failed(exc)
+        future.add_done_callback(done)
+
+    def _spawn(self, coroutine) -> None:
+        task = self.loop.create_task(coroutine)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    async def close(self) -> None:
+        """Close every browser's socket ("going away") and stop sending (once; again does nothing)."""
+        if self._closed:
+            return
+        self._closed = True
+        for task in list(self._tasks):
+            task.cancel()
+        sockets = [b.socket for b in self.browsers]
+        for browser in self.browsers:
+            browser.closing = True
+        if sockets:
+            await asyncio.wait([asyncio.ensure_future(s.close(code=1001, message=b"the view stops")) for s in sockets],
+                               timeout=SHUTDOWN)
+        self._puts.shutdown(wait=False, cancel_futures=True)
+        skipped = self.skipped + sum(b.dropped for b in self.browsers)
+        if skipped:
+            _log.info("planthub view: %d bodies frames skipped for browsers still busy with the one before", skipped)
+
+
+async def fetch_scene(relay: Relay, timeout: float, hub_seen=lambda: False) -> dict:
+    """The scene, asked for until the hub answers (ViewError after `timeout` s; `hub_seen()` tells
+    whether the hub's token is there, for the message)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        left = deadline - time.monotonic()
+        scene = await asyncio.to_thread(relay.ask_scene, max(0.1, min(SCENE_ASK, left)))
+        if scene is not None:
+            return scene
+        if time.monotonic() >= deadline:
+            why = ("its hub is there but answers no scene query (a planthub older than this view?)" if hub_seen()
+                   else "is `planthub run` going there (--listen on that endpoint), and is the run named "
+                        f"{relay.run!r} (its scenario's name)?")
+            raise ViewError(f"no scene from the hub of run {relay.run!r} at {relay.where} within {timeout:g} s: {why}")
+        await asyncio.sleep(min(SCENE_RETRY, max(0.0, deadline - time.monotonic())))
+
+
+async def serve(relay: Relay, *, host: str, port: int, bundle, control: bool = True, reason: str = "",
+                timeout: float = 30.0, announce=print, opened=None) -> int:
+    """Join the run, serve the browsers until SIGINT or SIGTERM; the exit status (130, 143).
+    `announce(url)` tells where to open the page once it is served, `opened(url)` may open it."""
+    from aiohttp import web
+
+    from hub.view.http import application, is_loopback, missing_bundle
+
+    loop = asyncio.get_running_loop()
+    stop: asyncio.Future = loop.create_future()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(signum, lambda s=signum: stop.done() or stop.set_result(s))
+    view = None
+    try:
+        view = View(relay, control=control, reason=reason)
+        relay.join(Bridge(loop, view.deliver))
+        fetching = loop.create_task(fetch_scene(relay, timeout, lambda: view.hub_alive))
+        await asyncio.wait({fetching, stop}, return_when=asyncio.FIRST_COMPLETED)
+        if stop.done():
+            fetching.cancel()
+            await asyncio.gather(fetching, return_exceptions=True)
+            return 128 + stop.result()
+        view.scene = frames.frame("scene", scene=fetching.result())
+
+        problem = missing_bundle(bundle)
+        if problem:
+            _log.warning("planthub view: warning: %s", problem)
+        runner = web.AppRunner(application(view, bundle, loopback=is_loopback(host)), access_log=None,
+                               handle_signals=False)
+        await runner.setup()
+        try:
+            site = web.TCPSite(runner, host, port, shutdown_timeout=SHUTDOWN)
+            try:
+                await site.start()
+            except OSError as exc:
+                raise ViewError(f"cannot serve on {host}:{port}: {exc.strerror or exc}"
+                                + (" (another view? --port picks another)" if port else "")) from None
+            bound = runner.addresses[0][1]
+            shown = "127.0.0.1" if host in ("0.0.0.0", "::", "") else host   # every address: this machine's is one
+            url = f"http://{'[' + shown + ']' if ':' in shown else shown}:{bound}/"
+            announce(url)
+            if opened is not None:
+                loop.run_in_executor(None, opened, url)
+            signum = await stop
+        finally:
+            await view.close()
+            await runner.cleanup()
+        return 128 + signum
+    finally:
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            loop.remove_signal_handler(signum)
+        if view is not None:
+            await view.close()
