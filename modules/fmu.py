@@ -16,7 +16,8 @@ its own grid, inputs sampled there and outputs held until its next point. With
 `participant: launch` the hub starts `planthub serve-fmu` in a child process that serves the FMU
 over the Zenoh bus in lockstep; with `participant: join` it waits (`join_timeout`) for one
 started elsewhere, e.g. on another machine: `planthub serve-fmu FILE --run RUN --name OBJECT
---connect tcp/HUB:PORT`. Same results as in-process, bit for bit.
+--connect tcp/HUB:PORT`. Same results as in-process, bit for bit. On a bus with TLS the launched
+process presents `tls: {certificate, key}`, or else the hub's own certificate, with a warning.
 """
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ import re
 import sys
 
 from hub.bus.lockstep import RemoteSpec
+from hub.bus.tls import LAUNCHED_SCHEMA, launched_problems
 from hub.logic.component import LogicComponent
 from hub.logic.factory import SlavePlan, make_slave
 from hub.logic.fmi import FmuError, inspect_fmu
@@ -65,6 +67,9 @@ class Fmu(Module):
                              "description": "a non-finite real from the logic: stop the run, or hold the last good value (logged)"},
             "join_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
                              "description": "s to wait for the participant to join (and to rejoin in a paused run)"},
+            "tls": {**LAUNCHED_SCHEMA, "description": "with participant: launch, the certificate `planthub "
+                                                      "serve-fmu` presents on the bus (without: the hub's own, "
+                                                      "with a warning)"},
         },
         "required": ["file"],
         "additionalProperties": False,
@@ -81,6 +86,9 @@ class Fmu(Module):
         if params["isolate"] and "participant" in params:
             problems.append((("isolate",), "isolate and participant exclude each other: a child process over a "
                                            "pipe, or a participant over the bus"))
+        if "tls" in params and params.get("participant") != "launch":
+            problems.append((("tls",), "a certificate goes with participant: launch, a process the hub starts on "
+                                       "the bus; one that joins presents its own (serve-fmu --tls-cert, --tls-key)"))
         variables = fmu.variables
         ports = {v.name for v in fmu.of("input") + fmu.of("output")}
         tunable = {v.name: v for v in fmu.of("parameter")}
@@ -116,7 +124,10 @@ class Fmu(Module):
             return [(("file",), f"{fmu.path.name} cannot handle variable communication steps, "
                                 "which run.event_driven needs (canHandleVariableCommunicationStepSize); "
                                 "or give it its own fixed `step`")]
-        return own_step_problems(params, run)
+        found = own_step_problems(params, run)
+        if "tls" in params:
+            found += [(("tls",) + place, message) for place, message in launched_problems(params["tls"], run.bus)]
+        return found
 
     @classmethod
     def slots(cls, params):
@@ -143,9 +154,10 @@ class Fmu(Module):
         outputs = [(s, v) for s, v in ports if fmu.variables[v].causality == "output"]
         parameters = {k: fmu.variables[k].type.coerce(v) for k, v in params["parameters"].items()}
         launch = params.get("participant") == "launch"
+        own = (params["tls"]["certificate"], params["tls"]["key"]) if "tls" in params else None
         spec = RemoteSpec(name, tuple((s.name, s.type) for s, _ in inputs), tuple((s.name, s.type) for s, _ in outputs),
                           parameters, tuple(cls.serve_command(params)) if launch else None,
-                          None, float(params["join_timeout"]), f"FMU {fmu.path.name}")
+                          None, float(params["join_timeout"]), f"FMU {fmu.path.name}", tls=own)
         transport = "bus" if "participant" in params else "child" if params["isolate"] else "hub"
         slave = make_slave(SlavePlan(transport, spec, fmu=fmu, variables=(tuple(v for _, v in inputs),
                                                                            tuple(v for _, v in outputs)),

@@ -10,7 +10,8 @@ inputs and outputs and gets `parameters` when the hub welcomes it. With `command
 it (in `cwd`, default the scenario's folder; `python` is the hub's own interpreter) and stops it
 at the end; without, it waits `join_timeout` s for one started elsewhere (`--run`, `--name`,
 `--connect`). A Python participant can be named by its module instead: `python: [MODULE, ARGS…]`
-launches `python -m MODULE ARGS…`, and with `in_process: true` the hub makes the same logic with
+launches `python -m MODULE ARGS…`. On a bus with TLS a launched process presents `tls: {certificate,
+key}` (paths relative to the scenario file), or else the hub's own certificate, with a warning. With `in_process: true` the hub makes the same logic with
 MODULE's `participant(ARGS)` and steps it in its own process, without the bus (hub/logic/inprocess.py):
 the same results, bit for bit, without the round trip. Like an FMU it steps from t to t + h with
 the inputs of t, and its outputs appear at t + h; `step` gives it its own, longer step. A void
@@ -19,6 +20,7 @@ input is true in the steps a flow fed it; a void output true fires the event.
 from __future__ import annotations
 
 from hub.bus.lockstep import RemoteSpec
+from hub.bus.tls import LAUNCHED_SCHEMA, launched_problems
 from hub.logic.component import LogicComponent
 from hub.logic.factory import SlavePlan, make_slave
 from hub.core.logic_spec import own_step_problems
@@ -48,6 +50,7 @@ class ParticipantModule(Module):
                            "description": "with `python`: run the logic inside the hub, not as a process on the bus"},
             "cwd": {"type": "string", "x-path": True, "default": ".",
                     "description": "folder the command runs in, relative to the scenario file"},
+            "tls": LAUNCHED_SCHEMA,
             "on_bad_value": {"enum": ["stop", "hold"], "default": "stop",
                              "description": "a non-finite real from the logic: stop the run, or hold the last good value (logged)"},
             "join_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
@@ -67,11 +70,19 @@ class ParticipantModule(Module):
             problems.append((("python",), "give `command` (any program) or `python` (a Python module), not both"))
         if params["in_process"] and "python" not in params:
             problems.append((("in_process",), "only a Python participant (`python: [MODULE, ...]`) runs in-process"))
+        if "tls" in params and params["in_process"]:
+            problems.append((("tls",), "an in-process participant is not on the bus: it needs no certificate"))
+        elif "tls" in params and "command" not in params and "python" not in params:
+            problems.append((("tls",), "the hub launches no process here (no `command` or `python`): a participant "
+                                       "that joins by itself presents its own certificate (--tls-cert, --tls-key)"))
         return problems
 
     @classmethod
     def check_run(cls, params, run):
-        return own_step_problems(params, run)
+        found = own_step_problems(params, run)
+        if "tls" in params:
+            found += [(("tls",) + place, message) for place, message in launched_problems(params["tls"], run.bus)]
+        return found
 
     @classmethod
     def slots(cls, params):
@@ -85,8 +96,9 @@ class ParticipantModule(Module):
         command = tuple(params["command"]) if "command" in params else None
         if "python" in params:
             command = ("python", "-m", *params["python"])
+        own = (params["tls"]["certificate"], params["tls"]["key"]) if "tls" in params else None
         spec = RemoteSpec(name, inputs, outputs, dict(params["parameters"]), command, params["cwd"],
-                          float(params["join_timeout"]))
+                          float(params["join_timeout"]), tls=own)
         plan = SlavePlan("hub", spec, python=tuple(params["python"])) if params["in_process"] else SlavePlan("bus", spec)
         slave = make_slave(plan, world.rate)
         as_pairs = lambda pairs: [(n, k is SlotType.VOID) for n, k in pairs]

@@ -105,6 +105,29 @@ def test_nan_in_a_list_is_named_with_its_place(tmp_path):
     assert problems(path) == [f"{path}:{line(BASE, 'position: [1.5')}: objects.barrier.position[1]: nan is not a finite number"]
 
 
+def test_nan_in_a_parameter_is_not_judged_again_by_the_modules_own_checks():
+    """The separator's check divides bottle_diameter by 2: a NaN there, reported and set aside, must
+    not reach it (it did: a TypeError traceback)."""
+    path = ROOT / "scenarios" / "separator.yaml"
+    text = path.read_text()
+    assert problems(path, {"objects.sep.bottle_diameter": float("nan")}) == [
+        f"{path}:{line(text, 'sep: {module: separator')}: objects.sep.bottle_diameter: nan is not a finite number"]
+
+
+@pytest.mark.parametrize("key, value, shown", [("run.duration", 1e300, "1e+300"),
+                                              ("objects.belt.length", -2.0 ** 60, "-1.152921504606847e+18"),
+                                              ("run.seed", 2 ** 70, "1180591620717411303424")])
+def test_a_number_beyond_2_to_the_53_is_named(tmp_path, key, value, shown):
+    """Found by the property tests: a participant's `step: 1.2e306` overflowed to infinity when the
+    checker counted its ticks (OverflowError). No scenario number needs more than a double holds
+    exactly."""
+    path = write(tmp_path, BASE)
+    at = {"run.duration": "duration: 3.5", "objects.belt.length": "length: 2.0", "run.seed": "seed: 0"}[key]
+    assert problems(path, {key: value}) == [
+        f"{path}:{line(BASE, at)}: {key}: {shown} is out of range: a scenario's numbers stay within ±2**53 "
+        f"(about 9.0e15)"]
+
+
 @pytest.mark.parametrize("entry, message", [
     ('{slot: barrier.trigger.occupied, is: {"==": true, "!=": false}}', "expect[0].is: {'==': True, '!=': False} has too many properties"),
     ("{slot: barrier.trigger.occupied, is: yes}", "expect[0].is: 'yes' is not of type 'object'"),

@@ -3,6 +3,8 @@ as over tcp; a participant without the right authority or certificate cannot joi
 
     drive.logic ══ tls/127.0.0.1 (mutual) ══ python -m modules.belt_drive_logic
 """
+import json
+import shutil
 import time
 
 import pytest
@@ -16,7 +18,7 @@ from hub.bus.tls import TlsSettings
 
 from .bus_support import BELT_FMU, BELT_PARTICIPANT, hub, output_of, process, same_files
 from .dataplane_support import every_point, settle
-from .helpers import run_scenario
+from .helpers import ROOT, run_scenario
 
 
 @pytest.fixture(scope="module")
@@ -220,6 +222,58 @@ def test_under_access_control_a_participant_not_named_cannot_join(certs, tmp_pat
     assert (code, err) == (1, "planthub participant 'drive': the run stopped before I could join\n")
 
 
+def test_a_launched_participant_with_its_own_certificate_joins_under_access_control_without_the_hubs_key(
+        certs, over_tcp, tmp_path):
+    """`tls: {certificate, key}` on the object, relative to the scenario file: the process is handed
+    that certificate, not the hub's (it writes what its environment holds), joins as `plc`, the one
+    name access control lets serve logic, and the hub does not warn."""
+    shutil.copytree(certs, tmp_path / "certs")
+    told = tmp_path / "told.json"
+    scene = tmp_path / "belt_ramp_participant.yaml"
+    scene.write_text(BELT_PARTICIPANT.read_text().replace(
+        "    command: [python, -m, modules.belt_drive_logic]\n",
+        f"    command: [python, -m, tests.participants.tells_its_tls, '{told}']\n    cwd: '{ROOT}'\n"
+        "    tls: {certificate: certs/plc.pem, key: certs/plc.key}\n"))
+    notes = []
+    run_scenario(scene, tmp_path / "out", {"run.bus": {"listen": [tls_endpoint()], "tls": tls_section(certs),
+                                                       "access": {"control": ["plc"]}}}, log=notes.append)
+    assert same_files(over_tcp, tmp_path / "out")
+    env = json.loads(told.read_text())
+    assert (env["PLANTHUB_TLS_CERT"], env["PLANTHUB_TLS_KEY"]) == (str(tmp_path / "certs" / "plc.pem"),
+                                                                   str(tmp_path / "certs" / "plc.key"))
+    assert env["PLANTHUB_TLS_CA"] == str(certs / "ca.pem")
+    assert not [value for value in env.values() if "hub." in value]
+    assert not [note for note in notes if "own certificate and private key" in note]
+
+
+def test_a_launched_participant_without_a_certificate_of_its_own_gets_the_hubs_with_a_warning(certs, tmp_path):
+    told = tmp_path / "told.json"
+    notes = []
+    run_scenario(BELT_PARTICIPANT, tmp_path / "out", {
+        "run.bus": {"listen": [tls_endpoint()], "tls": tls_section(certs), "access": {"control": []}},
+        "objects.drive.command": ["python", "-m", "tests.participants.tells_its_tls", str(told)],
+        "objects.drive.cwd": str(ROOT)}, log=notes.append)
+    env = json.loads(told.read_text())
+    assert (env["PLANTHUB_TLS_CERT"], env["PLANTHUB_TLS_KEY"]) == (str(certs / "hub.pem"), str(certs / "hub.key"))
+    assert ("participant 'drive' is launched with the hub's own certificate and private key (PLANTHUB_TLS_KEY): "
+            "it can act as the hub on the bus; give it a certificate of its own with `tls: {certificate, key}` "
+            "on its object") in notes
+
+
+def test_an_fmu_served_by_a_launched_process_presents_its_own_certificate(certs, tmp_path):
+    """`planthub serve-fmu`, launched for `participant: launch`, joins as `plc` under access control."""
+    notes = []
+    run_scenario(BELT_FMU, tmp_path / "out", {
+        "run.bus": {"listen": [tls_endpoint()], "tls": tls_section(certs), "access": {"control": ["plc"]}},
+        "objects.drive.participant": "launch",
+        "objects.drive.tls": {"certificate": str(certs / "plc.pem"), "key": str(certs / "plc.key")}},
+        log=notes.append)
+    over_the_hub = tmp_path / "in_hub"
+    run_scenario(BELT_FMU, over_the_hub)
+    assert same_files(over_the_hub, tmp_path / "out")
+    assert not [note for note in notes if "own certificate and private key" in note]
+
+
 # --- bad set-ups: named, with file and line ------------------------------------------------------
 def scenario_problems(write_scenario, bus: str) -> list[str]:
     path = write_scenario(f"""
@@ -313,3 +367,86 @@ def test_a_tls_listen_flag_without_tls_settings_cannot_open_the_bus():
         Bus(BusSettings(listen=("tls/127.0.0.1:7447",)))
     assert str(info.value) == ("cannot open the bus: run.bus.listen[0]: tls/127.0.0.1:7447 is a TLS endpoint: "
                                "give the TLS settings with a certificate and its key")
+
+
+# --- a launched participant's own certificate, checked at load -------------------------------------
+OWN_CERTIFICATE = """
+    planthub: 1
+    run:
+      bus:
+        listen: [tls/127.0.0.1:7447]
+        tls: {{ca: {certs}/ca.pem, certificate: {certs}/hub.pem, key: {certs}/hub.key, mutual: true}}
+        access: {{control: [plc]}}
+    objects:
+      drive:
+        module: participant
+        outputs: {{speed: real}}
+        command: [python, -m, modules.belt_drive_logic]
+        tls: {tls}
+    """
+
+
+def own_certificate_problems(write_scenario, certs, tls: str, text: str = OWN_CERTIFICATE) -> list[str]:
+    path = write_scenario(text.format(certs=certs, tls=tls))
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    return [str(p).replace(str(path), "scene.yaml").replace(str(certs), "CERTS").replace(str(path.parent), "DIR")
+            for p in info.value.problems]
+
+
+def test_a_participants_own_certificate_files_are_named_relative_to_the_scenario(write_scenario, certs):
+    assert own_certificate_problems(write_scenario, certs, "{certificate: certs/plc.pem, key: certs/plc.key}") == [
+        "scene.yaml:12: objects.drive.tls.certificate: no such file: DIR/certs/plc.pem",
+        "scene.yaml:12: objects.drive.tls.key: no such file: DIR/certs/plc.key"]
+
+
+def test_a_participants_key_that_is_not_its_certificates_is_named(write_scenario, certs):
+    assert own_certificate_problems(write_scenario, certs, f"{{certificate: {certs}/plc.pem, key: {certs}/hmi.key}}") == [
+        "scene.yaml:12: objects.drive.tls.key: CERTS/hmi.key is not the key of the certificate CERTS/plc.pem"]
+
+
+def test_a_participants_certificate_whose_name_access_control_does_not_list_is_named(write_scenario, certs):
+    assert own_certificate_problems(write_scenario, certs, f"{{certificate: {certs}/hmi.pem, key: {certs}/hmi.key}}") == [
+        "scene.yaml:12: objects.drive.tls.certificate: CERTS/hmi.pem names 'hmi' (its common name), which "
+        "run.bus.access.control does not list (plc): the participant could not serve its logic; add 'hmi' to control"]
+
+
+def test_a_participants_certificate_of_another_authority_is_named(write_scenario, certs):
+    assert own_certificate_problems(write_scenario, certs,
+                                    f"{{certificate: {certs}/intruder.pem, key: {certs}/intruder.key}}") == [
+        "scene.yaml:12: objects.drive.tls.certificate: CERTS/intruder.pem is not signed by the run's authority "
+        "CERTS/ca.pem (run.bus.tls.ca): the hub would refuse its handshake",
+        "scene.yaml:12: objects.drive.tls.certificate: CERTS/intruder.pem names 'intruder' (its common name), which "
+        "run.bus.access.control does not list (plc): the participant could not serve its logic; add 'intruder' to "
+        "control"]
+
+
+def test_a_participants_certificate_without_its_key_is_named(write_scenario, certs):
+    assert own_certificate_problems(write_scenario, certs, f"{{certificate: {certs}/plc.pem}}") == [
+        "scene.yaml:12: objects.drive.tls: 'key' is missing"]
+
+
+def test_a_participants_certificate_on_a_bus_without_tls_is_named(write_scenario, certs):
+    text = OWN_CERTIFICATE.replace("listen: [tls/127.0.0.1:7447]", "listen: [tcp/127.0.0.1:7447]").replace(
+        "        tls: {{ca: {certs}/ca.pem, certificate: {certs}/hub.pem, key: {certs}/hub.key, mutual: true}}\n", "")
+    text = text.replace("        access: {{control: [plc]}}\n", "")
+    assert own_certificate_problems(write_scenario, certs, f"{{certificate: {certs}/plc.pem, key: {certs}/plc.key}}",
+                                    text) == [
+        "scene.yaml:10: objects.drive.tls: the run's bus does not use TLS (no run.bus.tls), so a certificate of the "
+        "participant's own has no use: give run.bus.tls, or leave this out"]
+
+
+def test_a_certificate_for_a_process_the_hub_does_not_launch_is_named(write_scenario, certs):
+    own = f"{{certificate: {certs}/plc.pem, key: {certs}/plc.key}}"
+    joins = OWN_CERTIFICATE.replace("        command: [python, -m, modules.belt_drive_logic]\n", "")
+    assert own_certificate_problems(write_scenario, certs, own, joins) == [
+        "scene.yaml:11: objects.drive.tls: the hub launches no process here (no `command` or `python`): a "
+        "participant that joins by itself presents its own certificate (--tls-cert, --tls-key)"]
+    fmu = OWN_CERTIFICATE.replace("""        module: participant
+        outputs: {{speed: real}}
+        command: [python, -m, modules.belt_drive_logic]""", f"""        module: fmu
+        file: {ROOT}/build/fmus/belt_drive-fmi2.fmu
+        participant: join""")
+    assert own_certificate_problems(write_scenario, certs, own, fmu) == [
+        "scene.yaml:12: objects.drive.tls: a certificate goes with participant: launch, a process the hub starts on "
+        "the bus; one that joins presents its own (serve-fmu --tls-cert, --tls-key)"]

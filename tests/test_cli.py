@@ -2,10 +2,12 @@
 import argparse
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
 import textwrap
+import time
 from datetime import datetime
 from pathlib import Path
 from xml.etree import ElementTree
@@ -233,6 +235,66 @@ def test_ctrl_c_exits_130_with_the_summary_so_far(tmp_path):
     assert err == "planthub: SIGINT: the run stops at the next communication point\n"   # not said twice
     assert "\n  stopped      interrupted by SIGINT at t = " in out
     assert json.loads((tmp_path / "summary.json").read_text())["ended"]["kind"] == "stopped"
+
+
+INTERRUPTED = """
+    planthub: 1
+    run: {duration: 600, communication_step: 0.02}
+    objects:
+      belt: {module: conveyor, position: [0, 0, 0], length: 2, speed: 0.5}
+      bottle: {module: bottle, position: [0.04, 0, 0]}
+      gate: {module: light_barrier, position: [1.5, 0, 0.05]}
+    record: [bottle.body.position]
+    expect:
+      - {name: the belt runs at 0.1 s, slot: belt.drive.running, at: 0.1, is: {"==": true}}
+      - {name: the belt runs at 500 s, slot: belt.drive.running, at: 500, is: {"==": true}}
+      - {name: the belt runs at the end, slot: belt.drive.running, is: {"==": true}}
+      - {name: the belt never runs, slot: belt.drive.running, always: {"==": false}}
+      - {name: nothing passes the gate, slot: gate.trigger.on_enter, always: {"==": false}}
+    """
+
+
+@pytest.mark.parametrize("signum, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)], ids=["SIGINT", "SIGTERM"])
+def test_a_signal_during_planthub_test_judges_what_ran_and_writes_the_junit_file(write_scenario, tmp_path,
+                                                                                 signum, status):
+    """Interrupted at about 0.5 s of a 600 s run (paced to the wall clock), before the bottle reaches
+    the gate at 2.9 s: a value at a time it reached is judged, and so is an `always` it broke; what
+    the rest of the run could change is not judged, and says why."""
+    path = write_scenario(INTERRUPTED)
+    out, junit = tmp_path / "out", tmp_path / "report.xml"
+    with process("-m", "hub", "test", path, "--realtime", "1", "--out", out, "--junit", junit) as proc:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and not (
+                (out / "recording.csv").is_file() and len((out / "recording.csv").read_text().splitlines()) > 2):
+            time.sleep(0.05)   # rows are flushed every 0.5 s of wall time: the run is under way
+        proc.send_signal(signum)
+        stdout, stderr = proc.communicate(timeout=60)
+    name = signal.Signals(signum).name
+    assert proc.returncode == status, stderr
+    assert stderr == f"planthub: {name}: the run stops at the next communication point\n"
+    lines = stdout.splitlines()
+    t = re.fullmatch(rf"  stopped      interrupted by {name} at t = ([0-9.]+) s", lines[1]).group(1)
+    assert 0.2 < float(t) < 2.9
+    assert lines[0] == f"planthub test scene  ({path}, {t} s simulated)"
+    when = f"not judged: the run was interrupted at t = {t} s"
+    assert lines[2:5] == ["  ✓ the belt runs at 0.1 s — belt.drive.running was True at 0.1 s",
+                          f"  ? the belt runs at 500 s — {when}, before 500 s",
+                          f"  ? the belt runs at the end — {when} (so far: belt.drive.running was True at {t} s)"]
+    assert lines[5].startswith("  ✗ the belt never runs — failed ") and "at 0 s it was True" in lines[5]
+    assert lines[6:] == [f"  ? nothing passes the gate — {when} (so far: held)", "1 passed, 1 failed, 3 not judged"]
+    assert json.loads((out / "summary.json").read_text())["ended"] == {
+        "kind": "stopped", "reason": f"interrupted by {name} at t = {t} s"}
+    suite = ElementTree.parse(junit).getroot().find("testsuite")
+    assert (suite.get("tests"), suite.get("failures"), suite.get("skipped")) == ("6", "2", "3")
+    cases = {c.get("name"): c for c in suite.findall("testcase")}
+    assert cases["the run"].find("failure").get("message") == f"interrupted by {name} at t = {t} s"
+    assert cases["the belt never runs"].find("failure") is not None
+    assert cases["the belt runs at the end"].find("skipped").get("message") == (
+        f"{when} (so far: belt.drive.running was True at {t} s)")
+    assert [c.find("failure") is None and c.find("skipped") is None for c in cases.values()] == [
+        True, False, False, False, False, False]
+    assert ("ended", f"interrupted by {name} at t = {t} s") in [(p.get("name"), p.get("value"))
+                                                                 for p in suite.find("properties")]
 
 
 def test_describe_gives_each_parameters_form_and_an_example_that_works(write_scenario):

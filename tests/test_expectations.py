@@ -170,3 +170,28 @@ def test_allow_empty_goes_with_always_and_when(write_scenario):
         load_scenario(path)
     assert str(info.value.problems[0]) == (f"{path}:5: expect[0].allow_empty: `allow_empty` goes with `always` and "
                                            "`when`: only those can go unjudged")
+
+
+def test_an_interrupted_run_keeps_what_is_settled_and_leaves_the_rest_unjudged():
+    """At tick 300 (2 s at 150 Hz): a jam seen and orders delivered are settled; no jam so far,
+    orders short and an `always` whose `when` has not fired yet could each still change."""
+    from hub.core.slots import SlotRef, SlotType
+    from hub.scenario.expectations import Expectation, Implied, NoJam, Outcome, interrupted
+
+    waiting = Expectation("only B", SlotRef("end", "bin", "object"), SlotType.STRING, "==", "B", always=True,
+                          when=SlotRef("end", "bin", "taken"))
+    orders = Implied("the run ends with its 4 orders delivered (run.orders)")
+    outcomes = [Outcome(NoJam("no jam"), False, "1 jammed: b1 on belt from 1.2 s"),
+                Outcome(NoJam("no jam"), True, "held"),
+                Outcome(orders, True, "4 delivered"),
+                Outcome(orders, False, "the run ended at t = 2 s with 1 of 4 orders delivered"),
+                Outcome(waiting, False, "never judged: end.bin.taken never fired (say `allow_empty: true` if that "
+                                        "is a pass)")]
+    judged = interrupted(outcomes, 300, 150)
+    assert [(o.judged, o.passed) for o in judged] == [(True, False), (False, False), (True, True), (False, False),
+                                                      (False, False)]
+    when = "not judged: the run was interrupted at t = 2 s"
+    assert [o.message for o in judged] == [
+        "1 jammed: b1 on belt from 1.2 s", f"{when} (so far: held)", "4 delivered",
+        f"{when} (so far: the run ended at t = 2 s with 1 of 4 orders delivered)",
+        f"{when} (so far: never judged: end.bin.taken never fired (say `allow_empty: true` if that is a pass))"]

@@ -9,6 +9,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+from hub.core import scratch
 from hub.core.errors import SimulationError
 from hub.core.lifetime import guarded
 
@@ -25,13 +26,16 @@ class Launched:
                 os.sep in program and os.access(Path(cwd or ".") / program, os.X_OK)):
             # Checked here: the guard that starts it would only fail in the child, with a traceback.
             raise SimulationError(f"participant {name!r}: cannot start {' '.join(command)!r}: No such file or directory")
-        handle, path = tempfile.mkstemp(prefix=f"planthub-{name}-", suffix=".log")
+        # In the hub's scratch folder, as is whatever the process puts in PLANTHUB_SCRATCH: swept by
+        # the next run if the hub is killed before it removes them.
+        handle, path = tempfile.mkstemp(prefix=f"{name}-", suffix=".log", dir=scratch.folder())
         self.log = Path(path)
         try:
             with os.fdopen(handle, "wb") as out:
                 # guarded: the kernel kills it if the hub dies without stopping it (kill -9)
                 self.process = subprocess.Popen(
-                    guarded(self.command), cwd=cwd, env={**os.environ, **env}, stdin=subprocess.DEVNULL,
+                    guarded(self.command), cwd=cwd, stdin=subprocess.DEVNULL,
+                    env={**os.environ, **env, scratch.ENVIRONMENT: str(scratch.folder())},
                     stdout=out, stderr=subprocess.STDOUT,
                     # Its own process group, so a Ctrl-C at the hub's terminal is the hub's to handle;
                     # but the hub's session: with autogroup scheduling (Linux) a new session would make

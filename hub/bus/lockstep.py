@@ -37,6 +37,7 @@ class RemoteSpec:
     cwd: str | None = None
     join_timeout: float = 10.0
     detail: str = ""                            # how it is served, for messages: "FMU x.fmu"
+    tls: tuple[str, str] | None = None          # a launched process's own certificate and key; None: the hub's
 
     @property
     def label(self) -> str:
@@ -129,11 +130,11 @@ class Lockstep:
                "PLANTHUB_CONNECT": ",".join(connect),
                "PLANTHUB_MODE": mode, "PLANTHUB_LEASE": repr(self.lease),
                "PLANTHUB_JOIN_TIMEOUT": repr(spec.join_timeout),
-               **tls_environment(self.bus.settings.tls, loopback=not self.bus.settings.connect)}
-        if "PLANTHUB_TLS_KEY" in env and "--tls-key" not in spec.command:
+               **tls_environment(self.bus.settings.tls, loopback=not self.bus.settings.connect, own=spec.tls)}
+        if spec.tls is None and "PLANTHUB_TLS_KEY" in env and "--tls-key" not in spec.command:
             self.warn(f"{spec.label} is launched with the hub's own certificate and private key "
                       f"(PLANTHUB_TLS_KEY): it can act as the hub on the bus; give it a certificate of its "
-                      f"own with --tls-cert and --tls-key in its command")
+                      f"own with `tls: {{certificate, key}}` on its object")
         return Launched(spec.name, list(spec.command), spec.cwd, env)
 
     def _wait_ready(self, peers: list[_Peer], verb: str, done=lambda peer: peer.ready) -> None:

@@ -147,18 +147,98 @@ def refused(endpoint: str, tls: TlsSettings, timeout: float = 2.0) -> str | None
     return None
 
 
-def environment(tls: TlsSettings | None, *, loopback: bool) -> dict[str, str]:
+def environment(tls: TlsSettings | None, *, loopback: bool, own: tuple[str, str] | None = None) -> dict[str, str]:
     """What a participant the hub launches is told (PLANTHUB_TLS_*, read by hub/bus/participant.py):
-    the authority, and the hub's own certificate, which a process the hub started presents as its
-    own. `loopback`: it connects only to the hub's listeners, by 127.0.0.1, a name the hub's
+    the authority, and a certificate with its key: `own` (certificate, key), the participant's own
+    from the scenario, or else the hub's, which a process the hub started then presents as its own.
+    `loopback`: it connects only to the hub's listeners, by 127.0.0.1, a name the hub's
     certificate need not hold (the signature is checked all the same)."""
     if tls is None:
         return {}
     env = {"PLANTHUB_TLS_CA": tls.ca or "",
            "PLANTHUB_TLS_VERIFY_NAME": "0" if loopback or not tls.verify_name else "1"}
-    if tls.certificate and tls.key:
+    if own is not None:
+        env.update(PLANTHUB_TLS_CERT=own[0], PLANTHUB_TLS_KEY=own[1])
+    elif tls.certificate and tls.key:
         env.update(PLANTHUB_TLS_CERT=tls.certificate, PLANTHUB_TLS_KEY=tls.key)
     return env
+
+
+#: The `tls` parameter of a logic object whose process the hub launches (modules participant, fmu):
+#: the certificate that process presents on the bus instead of the hub's own.
+LAUNCHED_SCHEMA = {
+    "type": "object",
+    "properties": {
+        "certificate": {"type": "string", "x-path": True,
+                        "description": "PEM: the participant's certificate, signed by run.bus.tls.ca"},
+        "key": {"type": "string", "x-path": True, "description": "PEM: its private key, unencrypted"},
+    },
+    "required": ["certificate", "key"],
+    "additionalProperties": False,
+    "examples": [{"certificate": "certs/plc.pem", "key": "certs/plc.key"}],
+    "description": "with a launched process: its own certificate on the bus (without: the hub's own, with a warning)",
+}
+
+
+def launched_problems(tls: dict, bus) -> list[tuple[tuple, str]]:
+    """Everything wrong with a launched participant's own certificate (`tls`: the LAUNCHED_SCHEMA
+    parameter, paths absolute) on the bus of its run (`bus`: hub.bus.settings.BusSettings or
+    None), as (place within `tls`, message): the files, that the run's authority signed it, and
+    under access control, that its common name may serve logic."""
+    if bus is None or bus.tls is None:
+        return [((), "the run's bus does not use TLS (no run.bus.tls), so a certificate of the participant's "
+                     "own has no use: give run.bus.tls, or leave this out")]
+    own = TlsSettings(certificate=tls["certificate"], key=tls["key"])
+    found = [((field,), message) for field, message in file_problems(own)]
+    if found:
+        return found
+    certificate = tls["certificate"]
+    if bus.tls.ca and not file_problems(TlsSettings(ca=bus.tls.ca)) and not _signed_by(certificate, bus.tls.ca):
+        found.append((("certificate",), f"{certificate} is not signed by the run's authority {bus.tls.ca} "
+                                        f"(run.bus.tls.ca): the hub would refuse its handshake"))
+    if bus.control is not None:
+        name = common_name(certificate)
+        if name is None:
+            found.append((("certificate",), f"{certificate} has no common name, which access control "
+                                            f"(run.bus.access) knows participants by"))
+        elif name not in bus.control:
+            listed = ", ".join(bus.control) or "none"
+            found.append((("certificate",), f"{certificate} names {name!r} (its common name), which "
+                                            f"run.bus.access.control does not list ({listed}): the participant "
+                                            f"could not serve its logic; add {name!r} to control"))
+    return found
+
+
+def _signed_by(certificate: str, ca: str) -> bool:
+    """Whether the authority (a PEM bundle) signed `certificate`, directly or through the
+    intermediates that follow it in its own file."""
+    from cryptography import x509
+
+    try:
+        chain = x509.load_pem_x509_certificates(Path(certificate).read_bytes())
+        authorities = x509.load_pem_x509_certificates(Path(ca).read_bytes())
+    except ValueError:
+        return True   # what OpenSSL took but cryptography cannot read: left to the handshake to judge
+    issuers = authorities + chain[1:]
+    current = chain[0]
+    for _ in range(len(chain)):
+        parent = next((c for c in issuers if _issued(current, c)), None)
+        if parent is None:
+            return False
+        if parent in authorities:
+            return True
+        current = parent
+    return False
+
+
+def _issued(child, parent) -> bool:
+    from cryptography.exceptions import InvalidSignature
+
+    try:
+        child.verify_directly_issued_by(parent)
+        return True
+    except (ValueError, TypeError, InvalidSignature):   # another issuer, a bad signature, an unusable key type
+        return False
 
 
 def common_name(certificate: str) -> str | None:

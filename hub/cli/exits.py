@@ -22,7 +22,8 @@ exit codes:
   3    bad scenario: the scenario, or a file it names, does not pass its checks (each
        problem named with its file and line)
   130  interrupted (Ctrl-C; 143: SIGTERM): `run` ends at its next point and prints and
-       writes the summary so far"""
+       writes the summary so far; `test` judges what ran (the rest: not judged) and
+       writes its JUnit file"""
 
 
 class UsageError(PlanthubError):

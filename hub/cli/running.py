@@ -11,6 +11,7 @@ from pathlib import Path
 from hub.cli.bus import bus_settings
 from hub.cli.exits import FAILED, OK, UsageError
 from hub.cli.options import overrides, set_texts, verbosity
+from hub.core import scratch
 from hub.core.errors import PlanthubError, ScenarioError
 from hub.scenario.checker import load_scenario
 
@@ -21,6 +22,7 @@ def run_command(args) -> int:
     """`planthub run`: the summary on stdout, the files in --out (default runs/<name>)."""
     from hub.run.assembly import Run
 
+    scratch.sweep()   # what a hub killed before its clean-up left in the temporary folder
     scenario = load_scenario(args.scenario, overrides(args))
     out = args.out or Path("runs") / (scenario.name + ("_replay" if args.replay else ""))
     _check_replay(args, out)
@@ -62,49 +64,89 @@ def _print_run(run, args) -> None:
 
 
 def test_command(args) -> int:
-    """`planthub test`: a line per expectation and the tally; exit 1 if one failed."""
-    from hub.run.junit import write_junit
+    """`planthub test`: a line per expectation and the tally; exit 1 if one failed. A SIGINT or
+    SIGTERM ends the run at its next point; what ran is judged (the rest is "not judged"), the
+    JUnit file says the run was interrupted, and the exit status is 130 or 143."""
     from hub.run.simulation import Simulation
 
+    scratch.sweep()   # what a hub killed before its clean-up left in the temporary folder
     scenario = load_scenario(args.scenario, overrides(args))
     if not scenario.expect:
         raise UsageError(f"{args.scenario} has no `expect:` entries to judge")
     if args.out is not None:
         _check_replay(args, args.out)
     bus, pacer = _bus(args, scenario), _pacer(args, scenario)
-    stamp = datetime.now().replace(microsecond=0)
-    started = time.perf_counter()
-    properties = [("scenario", str(args.scenario)), ("seed", str(scenario.run.seed)),
-                  *(("set", item) for item in set_texts(args))]
+    verdicts = _Verdicts(args, scenario)
     try:
         with Simulation(args.scenario, overrides(args), out=args.out, bus=bus, replay=args.replay,
-                        pacer=pacer) as sim:
+                        pacer=pacer, signals=True, on_emergency=verdicts.emergency) as sim:
             sim.run()
             outcomes = sim.check()
             summary = sim.summary()
+            interruption = sim.interruption
     except PlanthubError as exc:
         # CI reads the XML, not the exit code alone: a run that failed, so nothing could be judged,
         # is an error there (a bad scenario was found before the run, on loading: exit 3, no XML).
         if args.junit and not isinstance(exc, ScenarioError):
-            write_junit(args.junit, scenario.name, [], time.perf_counter() - started, timestamp=stamp,
-                        hostname=socket.gethostname(), properties=properties, error=str(exc))
+            verdicts.junit([], error=str(exc))
         raise
     finally:
         if bus is not None:
             bus.close()
-    seconds = time.perf_counter() - started
-    print(f"planthub test {summary.scenario}  ({args.scenario}, {summary.sim_seconds:g} s simulated)")
-    if summary.ended is not None:
-        print(summary.ended.line())
-    for outcome in outcomes:
-        print(f"  {'✓' if outcome.passed else '✗'} {outcome.expectation.name} — {outcome.message}")
-    failed = sum(not o.passed for o in outcomes)
-    print(f"{len(outcomes) - failed} passed, {failed} failed")
-    if args.junit:
-        ended = [("ended", summary.ended.reason)] if summary.ended is not None else []
-        write_junit(args.junit, summary.scenario, outcomes, seconds, timestamp=stamp, hostname=socket.gethostname(),
-                    properties=properties + ended, output="\n".join(summary.lines(verbose=True)) + "\n")
-    return FAILED if failed else OK
+    interrupted = summary.ended.reason if interruption.interrupted and summary.ended is not None else None
+    failed = verdicts.report(summary, outcomes, interrupted)
+    return interruption.exit_status or (FAILED if failed else OK)   # 130 after a Ctrl-C, 143 after SIGTERM
+
+
+class _Verdicts:
+    """What `planthub test` prints and writes for one run: the summary's first line, a line per
+    expectation, the tally, and the JUnit file — once, from the main thread at the run's end or
+    from the helper thread that ends a run a signal found stuck (hub/run/interruption.py)."""
+
+    def __init__(self, args, scenario):
+        self.args = args
+        self.scenario = scenario
+        self.stamp = datetime.now().replace(microsecond=0)
+        self.started = time.perf_counter()
+        self.properties = [("scenario", str(args.scenario)), ("seed", str(scenario.run.seed)),
+                           *(("set", item) for item in set_texts(args))]
+        self.reported = False
+
+    def report(self, summary, outcomes, interrupted: str | None) -> int:
+        """Print and write the verdicts; the number of expectations that failed (the run's
+        interruption counts as one)."""
+        if self.reported:
+            return 0
+        self.reported = True
+        seconds = time.perf_counter() - self.started
+        print(f"planthub test {summary.scenario}  ({self.args.scenario}, {summary.sim_seconds:g} s simulated)")
+        if summary.ended is not None:
+            print(summary.ended.line())
+        marks = {(True, True): "✓", (True, False): "✗", (False, False): "?"}
+        for outcome in outcomes:
+            print(f"  {marks[outcome.judged, outcome.passed]} {outcome.expectation.name} — {outcome.message}")
+        failed = sum(o.judged and not o.passed for o in outcomes)
+        unjudged = sum(not o.judged for o in outcomes)
+        print(f"{len(outcomes) - failed - unjudged} passed, {failed} failed"
+              + (f", {unjudged} not judged" if unjudged else ""))
+        sys.stdout.flush()   # the emergency path ends the process with os._exit, which flushes nothing
+        if self.args.junit:
+            ended = [("ended", summary.ended.reason)] if summary.ended is not None else []
+            self.junit(outcomes, seconds, ended=ended, output="\n".join(summary.lines(verbose=True)) + "\n",
+                       interrupted=interrupted)
+        return failed + (interrupted is not None)
+
+    def junit(self, outcomes, seconds: float | None = None, *, ended=(), **details) -> None:
+        from hub.run.junit import write_junit
+
+        seconds = time.perf_counter() - self.started if seconds is None else seconds
+        write_junit(self.args.junit, self.scenario.name, outcomes, seconds, timestamp=self.stamp,
+                    hostname=socket.gethostname(), properties=self.properties + list(ended), **details)
+
+    def emergency(self, sim, reason: str) -> None:
+        """The run was stuck when a signal came (or a second one came): judged on what it reached."""
+        summary = sim.summary()
+        self.report(summary, sim.check(), summary.ended.reason if summary.ended is not None else reason)
 
 
 def _check_replay(args, out: Path) -> None:

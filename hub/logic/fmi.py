@@ -18,6 +18,7 @@ from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 from fmpy.fmi2 import fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
 from fmpy.fmi3 import FMU3Slave
 
+from hub.core import scratch
 from hub.core.errors import PlanthubError, SimulationError
 from hub.core.slots import SlotType
 
@@ -165,7 +166,7 @@ class FmuSlave:
         self.step_timeout = step_timeout
         self.busy_since = None   # time.monotonic() while inside doStep: the watchdog's clock
         self.log: deque[str] = deque(maxlen=_LOG_LINES)
-        self._dir = Path(tempfile.mkdtemp(prefix="planthub-fmu-"))
+        self._dir = Path(tempfile.mkdtemp(prefix=f"fmu-{instance}-", dir=scratch.folder()))
         self._fmu = None
         try:
             extract(str(interface.path), str(self._dir))

@@ -5,6 +5,7 @@ import multiprocessing
 import os
 import signal
 
+from hub.core import scratch
 from hub.core.errors import SimulationError
 from hub.core.lifetime import die_with_parent
 from hub.logic.fmi import FmuInterface, FmuSlave
@@ -36,7 +37,8 @@ class IsolatedFmu:
         context = multiprocessing.get_context("spawn")   # no fork of a process that holds pybullet
         self._conn, child = context.Pipe()
         self._process = context.Process(
-            target=_serve, args=(child, interface, instance, inputs, outputs, parameters, start_time, os.getpid()),
+            target=_serve, args=(child, interface, instance, inputs, outputs, parameters, start_time, os.getpid(),
+                                 str(scratch.folder())),
             name=f"planthub-fmu-{instance}", daemon=True)
         self._process.start()
         child.close()
@@ -97,9 +99,10 @@ class IsolatedFmu:
         self._conn.close()
 
 
-def _serve(conn, interface, instance, inputs, outputs, parameters, start_time, parent) -> None:
+def _serve(conn, interface, instance, inputs, outputs, parameters, start_time, parent, folder) -> None:
     """The child: owns one FmuSlave and answers the parent's messages until told to close."""
     die_with_parent(parent)   # a hub killed with SIGKILL takes its FMU workers along
+    scratch.adopt(folder)     # and its extracted FMU lies in the hub's folder, which the next run sweeps
     try:
         slave = FmuSlave(interface, instance, inputs, outputs, parameters, start_time)
     except SimulationError as exc:

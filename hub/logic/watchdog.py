@@ -8,6 +8,8 @@ import threading
 import time
 import weakref
 
+from hub.core import scratch
+
 log = logging.getLogger("planthub.logic")
 
 #: exit status of a hub ended by the watchdog: the run failed (README "Exit codes")
@@ -70,6 +72,7 @@ class Watchdog:
         log.critical("planthub: %s", message)
         for other in list(self._slaves):
             shutil.rmtree(getattr(other, "_dir", ""), ignore_errors=True)
+        scratch.remove()   # os._exit runs no atexit clean-up
         logging.shutdown()
         os._exit(EXIT_HUNG)
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hub.core import scratch
 from hub.physics.fields import ForceFields
 from hub.run.assembly import Run as Assembly
 from hub.scenario.checker import Scenario, load_scenario
@@ -45,7 +46,7 @@ class Run:
 def run(path, out: Path | None = None, overrides: dict | None = None) -> Run:
     """Run the scenario at `path` (recording into `out`, or a temporary folder) and read it back."""
     scenario = load_scenario(path, overrides)
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory(dir=scratch.folder()) as tmp:
         directory = Path(out) if out is not None else Path(tmp)
         with Assembly(scenario, out=directory) as assembled:
             started = time.perf_counter()

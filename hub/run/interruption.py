@@ -8,6 +8,7 @@ import signal
 import threading
 import time
 
+from hub.core import scratch
 from hub.core.observer import Stop
 
 log = logging.getLogger("planthub.run")
@@ -22,7 +23,7 @@ class Interruption:
     point (`stop`), with the exit status 128 + the signal's number (130, 143). If the run is stuck
     (a step inside a C call does not return, a wait) for GRACE seconds, or a second signal comes,
     `emergency(reason)` runs on a helper thread — the run's files closed complete, its summary
-    written — and the process ends with that status.
+    written — then each of `reporters(reason)`, and the process ends with that status.
 
     Python runs a signal handler only in the main thread and only between two bytecodes, so a
     thread stuck in an FMU would never see it; the wakeup file descriptor below is written by the
@@ -31,6 +32,8 @@ class Interruption:
     def __init__(self, rate: int, emergency):
         self.rate = rate
         self.emergency = emergency
+        self.reporters = []   # more to do with the reason once the files are complete (`planthub test`'s verdicts)
+        self.interrupted = False   # a signal ended the run (at a point, or from the helper thread)
         self.signum: int | None = None
         self._ended = threading.Event()
         self._previous = {}
@@ -79,15 +82,25 @@ class Interruption:
 
     def _end(self, signum: int, why: str) -> None:
         reason = f"interrupted by {signal.Signals(signum).name}; {why}, so it ends here"
+        if self.signum is None:
+            self.signum = signum   # a main thread stuck in a C call never ran the Python handler
+        self.interrupted = True
         try:
             self.emergency(reason)
+            for report in self.reporters:
+                try:
+                    report(reason)
+                except Exception:   # the process ends all the same; the files are complete
+                    log.exception("while reporting an interrupted run")
         finally:
+            scratch.remove()   # os._exit runs no atexit clean-up
             logging.shutdown()
             os._exit(128 + signum)
 
     def stop(self, tick: int) -> Stop | None:
         if self.signum is None:
             return None
+        self.interrupted = True
         return Stop(f"interrupted by {signal.Signals(self.signum).name} at t = {tick / self.rate:.9g} s")
 
     def close(self, reason: str = "") -> None:

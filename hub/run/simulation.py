@@ -12,7 +12,7 @@ from hub.run.assembly import Run
 from hub.run.master import RunResult
 from hub.run.summary import RunSummary
 from hub.scenario.checker import load_scenario
-from hub.scenario.expectations import Expectation, NoJam, Outcome, Watcher
+from hub.scenario.expectations import Expectation, NoJam, Outcome, Watcher, interrupted
 
 
 class Simulation:
@@ -28,11 +28,14 @@ class Simulation:
     read), so any slot can be read at any point. `out` writes recording.csv and events.csv, and
     summary.json when the simulation is closed. `summary()` gives the run summary at any point:
     for a plant (sinks, sources) bottles in, delivered, misrouted, on the line, throughput, jams.
-    The other keywords are those of hub.run.assembly.Run (`bus`, `replay`, `pacer`, `log`).
+    The other keywords are those of hub.run.assembly.Run (`bus`, `replay`, `pacer`, `log`,
+    `signals`). With `signals`, a SIGINT or SIGTERM ends the run at its next point, and `check()`
+    then judges only what the part that ran can tell; `on_emergency(sim, reason)` is called when
+    the process ends from a helper thread instead (a stuck step, a second signal: hub/run/interruption.py).
     """
 
     def __init__(self, scenario, overrides: dict | None = None, logic: dict | None = None,
-                 out: Path | None = None, **run_options):
+                 out: Path | None = None, on_emergency=None, **run_options):
         changes = dict(overrides or {})
         for name, file in (logic or {}).items():
             changes[f"objects.{name}.logic"] = {"file": str(Path(file).resolve())}
@@ -47,6 +50,8 @@ class Simulation:
             self.master = self._run.master
             self.watcher = Watcher(slots, self.plant.index, self.scenario.run.physics_rate)
             self.master.observers.append(self.watcher)
+            if on_emergency is not None and self.interruption is not None:
+                self.interruption.reporters.append(lambda reason: on_emergency(self, reason))
             self._run.start()   # participants on the bus are launched and awaited here
             self.master.communicate()
         except BaseException:
@@ -56,6 +61,11 @@ class Simulation:
     @property
     def recorder(self):
         return self._run.recorder
+
+    @property
+    def interruption(self):
+        """The signals' stop condition (hub/run/interruption.py) with `signals=True`, else None."""
+        return self._run.interruption
 
     @property
     def time(self) -> float:
@@ -125,7 +135,10 @@ class Simulation:
         jams = plant.jams if plant is not None else ()
         outcomes = [e.judge(jams, self.time) if isinstance(e, NoJam) else next(on_slots) for e in self.scenario.expect]
         # What the scenario's settings promise, judged by the modules that contribute them (run.orders).
-        return outcomes + [c.outcome(self.master.tick) for c in self._run.contributed if hasattr(c, "outcome")]
+        outcomes += [c.outcome(self.master.tick) for c in self._run.contributed if hasattr(c, "outcome")]
+        if self.interruption is not None and self.interruption.interrupted:
+            return interrupted(outcomes, self.master.tick, self.scenario.run.physics_rate)
+        return outcomes
 
     def close(self) -> None:
         self._run.close()

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 from hub.core.slots import SlotRef, SlotType
 
+NEVER_JUDGED = "never judged"   # an `always` whose `when` never fired: how its outcome opens
 OPERATORS = {"==": operator.eq, "!=": operator.ne, "<": operator.lt, "<=": operator.le,
              ">": operator.gt, ">=": operator.ge}
 
@@ -72,9 +73,39 @@ class NoJam:
 
 @dataclass
 class Outcome:
+    """How one expectation came out. `judged` False: the run ended before it could be (an
+    interrupted run); such an outcome has not passed either."""
+
     expectation: Expectation
     passed: bool
     message: str
+    judged: bool = True
+
+
+def interrupted(outcomes: list[Outcome], tick: int, rate: int) -> list[Outcome]:
+    """The outcomes of a run interrupted at `tick`, as far as what ran can judge them. A failure
+    seen stays one (an `always` broken, a jam), and so does a value at an `at` the run reached;
+    everything the rest of the run could still change — a value at the end, an `always` or `jams:
+    none` that held so far, orders not yet delivered — is not judged, and says so."""
+    when = f"the run was interrupted at t = {tick / rate:.9g} s"
+    out = []
+    for outcome in outcomes:
+        e = outcome.expectation
+        if isinstance(e, Expectation) and not e.always:
+            final = e.at is not None and e.at <= tick   # its moment came: judged as it is
+        elif isinstance(e, Implied):
+            final = outcome.passed                      # the orders were delivered
+        else:   # an `always`, `jams: none`: a failure seen is one, a `when` that did not fire yet is not
+            final = not outcome.passed and not outcome.message.startswith(NEVER_JUDGED)
+        if final:
+            out.append(outcome)
+            continue
+        if isinstance(e, Expectation) and not e.always and e.at is not None:
+            message = f"not judged: {when}, before {e.at / rate:.4g} s"
+        else:
+            message = f"not judged: {when} (so far: {outcome.message})"
+        out.append(Outcome(e, False, message, judged=False))
+    return out
 
 
 @dataclass
@@ -118,7 +149,7 @@ class Watcher:
                 if found:
                     outcomes.append(Outcome(e, False, f"failed {len(found)}×: {listed}"))
                 elif not self.judged.get(n) and not e.allow_empty:
-                    outcomes.append(Outcome(e, False, f"never judged: {e.when} never fired "
+                    outcomes.append(Outcome(e, False, f"{NEVER_JUDGED}: {e.when} never fired "
                                                       "(say `allow_empty: true` if that is a pass)"))
                 else:
                     outcomes.append(Outcome(e, True, f"held at {self.judged.get(n, 0)} points"
