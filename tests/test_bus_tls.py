@@ -450,3 +450,25 @@ def test_a_certificate_for_a_process_the_hub_does_not_launch_is_named(write_scen
     assert own_certificate_problems(write_scenario, certs, own, fmu) == [
         "scene.yaml:12: objects.drive.tls: a certificate goes with participant: launch, a process the hub starts on "
         "the bus; one that joins presents its own (serve-fmu --tls-cert, --tls-key)"]
+
+
+def test_the_scene_says_who_may_command_and_a_watch_only_view_is_told_why(certs):
+    """A view greys its panel out for a certificate access control lets only watch; it learns the
+    rules from the scene document (hub/view/scene.py) and its own certificate's common name."""
+    from hub.bus.tls import common_name
+    from hub.run.plant import Plant
+    from hub.view.scene import refusal, scene_document
+
+    scenario = load_scenario(BELT_FMU, {"run.bus": {"listen": [tls_endpoint()], "tls": tls_section(certs),
+                                                    "access": {"control": ["plc"], "watch": ["hmi"]}}})
+    with Plant(scenario) as plant:
+        scene = scene_document(plant, "belt_ramp_fmu")
+    assert scene["access"] == {"control": ["plc", "hub"], "watch": ["hmi"]}, "the hub's own name controls too"
+    assert refusal(scene, common_name(str(certs / "plc.pem"))) is None
+    assert refusal(scene, common_name(str(certs / "hmi.pem"))) == (
+        "this view's certificate names 'hmi', which may only watch this run (run.bus.access.control: plc, hub)")
+    assert refusal(scene, None) == ("the run's bus is under access control (run.bus.access) and this view shows "
+                                    "no certificate: it may watch at most")
+    with Plant(load_scenario(BELT_FMU)) as plant:
+        open_scene = scene_document(plant, "belt_ramp_fmu")
+    assert open_scene["access"] is None and refusal(open_scene, None) is None

@@ -205,6 +205,7 @@ def test_every_control_message_of_a_run_follows_the_wire_schema(tmp_path):
     from hub.bus.session import Inbox
 
     schema = json.loads((ROOT / "schemas" / "wire.schema.json").read_text())
+    scene = json.loads((ROOT / "schemas" / "scene.schema.json").read_text())   # what views read
     seen = Inbox()
     with Bus(BusSettings(mode="router")) as bus, hub(BELT_PARTICIPANT, tmp_path, {"run.duration": 0.2}, bus=bus) as master:
         with Bus(BusSettings(mode="client", connect=bus.endpoints)) as tap:
@@ -225,10 +226,13 @@ def test_every_control_message_of_a_run_follows_the_wire_schema(tmp_path):
         payload = message.payload
         if kind in ("step", "output"):   # a launched participant's: sealed (schemas/wire.md), the key its token
             payload = wire.unseal(token.encode(), payload)
-        jsonschema.Draft202012Validator({**schema, "$ref": f"#/$defs/{definition}"}).validate(wire.unpack(payload))
+        if kind in ("bodies", "events", "figures"):   # the view's messages (schemas/scene.schema.json)
+            jsonschema.Draft202012Validator({**scene, "$ref": f"#/$defs/{kind}_message"}).validate(wire.unpack(payload))
+        else:
+            jsonschema.Draft202012Validator({**schema, "$ref": f"#/$defs/{definition}"}).validate(wire.unpack(payload))
         kinds[kind] = kinds.get(kind, 0) + 1
     assert kinds["step"] == kinds["output"] - 1 == 10   # 0.2 s of 20 ms steps; the initial outputs
-    assert {"hello", "welcome", "state"} <= set(kinds)
+    assert {"hello", "welcome", "state", "bodies", "figures"} <= set(kinds)
 
 
 def test_a_served_fmu_announces_the_fmu_module_slots_with_events_and_renames(fmus):

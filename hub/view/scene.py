@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import json
 
+from hub.bus.tls import common_name
+
 FORMAT = "planthub-scene"
 VERSION = 1
 
@@ -29,7 +31,35 @@ def scene_document(plant, run: str) -> dict:
                "radius": float(b.radii[row]), "height": 2.0 * float(b.half_heights[row])}
               for row in range(len(b.labels))]
     return {"format": FORMAT, "version": VERSION, "run": run, "physics_rate": world.rate,
-            "objects": objects, "items": scene.items, "bodies": bodies}
+            "access": access(plant.scenario.run.bus), "objects": objects, "items": scene.items, "bodies": bodies}
+
+
+def access(settings) -> dict | None:
+    """Who may do what on this run's bus (run.bus.access), for a view to tell its operator why its
+    panel is off; None: no access control (any process that reaches the bus may command)."""
+    if settings is None or settings.control is None:
+        return None
+    control = list(dict.fromkeys(settings.control))
+    if settings.tls is not None and settings.tls.certificate:
+        own = common_name(settings.tls.certificate)
+        if own:
+            control = list(dict.fromkeys([*control, own]))   # the hub's own, as the bus's rules add it
+    return {"control": control, "watch": list(dict.fromkeys(settings.watch))}
+
+
+def refusal(scene: dict, name: str | None) -> str | None:
+    """Why a view whose certificate names `name` may not command this run (None: it may)."""
+    rules = scene.get("access")
+    if not rules:
+        return None
+    if name is None:
+        return ("the run's bus is under access control (run.bus.access) and this view shows no "
+                "certificate: it may watch at most")
+    if name in rules.get("control", []):
+        return None
+    allowed = ", ".join(rules.get("control", [])) or "nobody"
+    return (f"this view's certificate names {name!r}, which may only watch this run "
+            f"(run.bus.access.control: {allowed})")
 
 
 def scene_bytes(plant, run: str) -> bytes:
