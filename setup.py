@@ -23,8 +23,9 @@ from setuptools.errors import ExecError
 ROOT = os.path.dirname(os.path.abspath(__file__))
 # source pattern (recursive, relative to ROOT) → folder under hub/data/ it is copied to
 PACKAGE_DATA = {"schemas/*.json": "schemas", "scenarios/**/*.yaml": "scenarios"}
+VIEW_BUNDLE = os.path.join(ROOT, "build", "view")
 # What an sdist needs beyond the packages, to build the wheel again from it.
-SDIST_FOLDERS = ("fmus", "schemas", "scenarios")
+SDIST_FOLDERS = ("fmus", "schemas", "scenarios", "hub/view/web")
 
 
 class BuildPyWithData(build_py):
@@ -42,6 +43,25 @@ class BuildPyWithData(build_py):
                 self._copy(path, os.path.join(data, folder, os.path.relpath(path, base)))
         for fmu in self._build_fmus():
             self._copy(fmu, os.path.join(data, "build", "fmus", os.path.basename(fmu)))
+        for path in self._view_bundle():
+            self._copy(path, os.path.join(data, "build", "view", os.path.relpath(path, VIEW_BUNDLE)))
+
+    def _view_bundle(self) -> list[str]:
+        """The page of `planthub view` (hub/view/web/, bundled by esbuild into build/view/): built
+        here with npm when the source tree has no bundle yet. Without npm the wheel goes without it,
+        and `planthub view` says how to build it."""
+        index = os.path.join(VIEW_BUNDLE, "index.html")
+        if not os.path.isfile(index):
+            web = os.path.join(ROOT, "hub", "view", "web")
+            try:
+                subprocess.run(["npm", "ci", "--no-audit", "--no-fund"], cwd=web, check=True)
+                subprocess.run(["npm", "run", "build"], cwd=web, check=True)
+            except (OSError, subprocess.CalledProcessError) as exc:
+                print(f"setup.py: warning: the view's page is not in this wheel: building it with npm failed ({exc})",
+                      file=sys.stderr)
+                return []
+        return sorted(p for p in glob.glob(os.path.join(VIEW_BUNDLE, "**", "*"), recursive=True)
+                      if os.path.isfile(p) and not os.path.basename(p).startswith("."))
 
     def _build_fmus(self) -> list[str]:
         # Outside the source tree's build/fmus/, which belongs to `make fmus` and the dev venv:
@@ -91,7 +111,7 @@ class EggInfoWithSources(egg_info):
         super().find_sources()
         for folder in SDIST_FOLDERS:
             self.filelist.extend(path for path in sorted(glob.glob(f"{folder}/**/*", recursive=True))
-                                 if os.path.isfile(path) and "__pycache__" not in path)
+                                 if os.path.isfile(path) and "__pycache__" not in path and "node_modules" not in path)
 
 
 setup(distclass=WithMachineCode,

@@ -193,10 +193,13 @@ def test_a_participant_written_from_the_wire_document_alone_fits(in_process, tmp
     assert same_files(in_process, tmp_path)
 
 
-def test_every_control_message_of_a_run_follows_the_wire_schema(tmp_path):
+@pytest.mark.parametrize("how", ["launched", "joined"])
+def test_every_control_message_of_a_run_follows_the_wire_schema(tmp_path, how):
     """A tap on plant/<run>/@cosim/** sees hello, welcome, steps, outputs and states (the hub runs as a
     Zenoh router and the others as its clients, so it forwards what participants send); each is checked
-    against schemas/wire.schema.json."""
+    against schemas/wire.schema.json. The participant is launched (its messages sealed with its token)
+    or joins by itself (sealed with the key agreed in its hello and welcome, which carry `key`)."""
+    import contextlib
     import json
 
     import jsonschema
@@ -206,16 +209,27 @@ def test_every_control_message_of_a_run_follows_the_wire_schema(tmp_path):
 
     schema = json.loads((ROOT / "schemas" / "wire.schema.json").read_text())
     scene = json.loads((ROOT / "schemas" / "scene.schema.json").read_text())   # what views read
+    path = BELT_PARTICIPANT
+    if how == "joined":
+        path = tmp_path / "belt_ramp_participant.yaml"
+        path.write_text(BELT_PARTICIPANT.read_text().replace("    command: [python, -m, modules.belt_drive_logic]\n", ""))
     seen = Inbox()
-    with Bus(BusSettings(mode="router")) as bus, hub(BELT_PARTICIPANT, tmp_path, {"run.duration": 0.2}, bus=bus) as master:
+    with Bus(BusSettings(mode="router")) as bus, \
+            hub(path, tmp_path / "out", {"run.duration": 0.2, "objects.drive.join_timeout": 20}, bus=bus) as master:
         with Bus(BusSettings(mode="client", connect=bus.endpoints)) as tap:
             tap.subscribe("plant/belt_ramp_participant/@cosim/**", seen.put)
             assert wait_until(lambda: bus.publisher("plant/belt_ramp_participant/@cosim/probe", "x").matching, 5)
-            master.run()
-            token = master.link.lockstep.peers["drive"].token
+            with (process("-m", "modules.belt_drive_logic", "--run", "belt_ramp_participant", "--name", "drive",
+                          "--mode", "client", "--connect", bus.endpoints[0]) if how == "joined"
+                  else contextlib.nullcontext()) as proc:
+                master.run()
+                if proc is not None:
+                    assert output_of(proc)[0] == 0
+            key = master.link.lockstep.peers["drive"].key
             messages = []
             while (message := seen.get(1.0)) is not None:
                 messages.append(message)
+    assert len(key) == 32
     kinds = {}
     for message in messages:
         kind = message.key.rsplit("/", 1)[-1]
@@ -224,12 +238,16 @@ def test_every_control_message_of_a_run_follows_the_wire_schema(tmp_path):
         assert message.encoding == "application/msgpack", message.key
         definition = {"result": "command_result"}.get(kind, kind)
         payload = message.payload
-        if kind in ("step", "output"):   # a launched participant's: sealed (schemas/wire.md), the key its token
-            payload = wire.unseal(token.encode(), payload)
+        if kind in ("step", "output"):   # sealed (schemas/wire.md): with the token's key or the agreed one
+            payload = wire.unseal(key, payload)
         if kind in ("bodies", "events", "figures"):   # the view's messages (schemas/scene.schema.json)
             jsonschema.Draft202012Validator({**scene, "$ref": f"#/$defs/{kind}_message"}).validate(wire.unpack(payload))
         else:
             jsonschema.Draft202012Validator({**schema, "$ref": f"#/$defs/{definition}"}).validate(wire.unpack(payload))
+        if kind in ("hello", "welcome"):   # JSON Schema has no type for bytes: `key` is 32 of them, or absent
+            body = wire.unpack(payload)
+            assert ("key" in body) == (how == "joined") and ("token" in body) == (kind == "hello" and how == "launched")
+            assert "key" not in body or type(body["key"]) is bytes and len(body["key"]) == 32
         kinds[kind] = kinds.get(kind, 0) + 1
     assert kinds["step"] == kinds["output"] - 1 == 10   # 0.2 s of 20 ms steps; the initial outputs
     assert {"hello", "welcome", "state", "bodies", "figures"} <= set(kinds)

@@ -107,6 +107,8 @@ def test_the_installed_hub_reads_its_files_from_the_package(installed):
     assert (root / "schemas" / "scenario.schema.json").is_file()
     assert (root / "build" / "fmus" / "track_switch-fmi2.fmu").is_file()
     assert (root / "scenarios" / "paper" / "acceleration.yaml").is_file()   # `planthub report paper` runs these
+    assert (root / "build" / "view" / "index.html").is_file()   # the page `planthub view` serves
+    assert (root / "build" / "view" / "assets" / "main.js").is_file()
 
 
 def test_the_installed_version_is_the_projects(installed):

@@ -165,6 +165,7 @@ def test_with_the_pause_policy_a_participant_that_stops_for_a_while_carries_on_b
         with process(*command, "--run", "line1", "--name", "drive", "--connect", bus.endpoints[0]) as proc, \
                 resumed_at_exit(proc.pid):
             master.run(until_tick=MID_RUN)
+            before = master.link.lockstep.peers["drive"].key   # agreed in its hello and the hub's welcome
             timer = None
             if how == "freezes":
                 os.kill(proc.pid, signal.SIGSTOP)
@@ -175,10 +176,13 @@ def test_with_the_pause_policy_a_participant_that_stops_for_a_while_carries_on_b
             finally:
                 if timer is not None:
                     timer.join()
+            after = master.link.lockstep.peers["drive"].key
     notices = [r["detail"] for r in rows(tmp_path / "paused" / "bus_log.csv")]
     assert [n.split(":")[0] for n in notices] == ["paused", "resumed"]
     if how == "stalls":
         assert notices[1] == "resumed: participant 'drive' answered late"
+    # A rejoin after the loss is a new hello with a new key pair: a new seal key. A late answer keeps it.
+    assert len(before) == 32 and (after != before) == notices[1].endswith("rejoined")
     # The replay (here with the logic in the hub: the same results, bit for bit) has no pause:
     # the pause is in bus_log.csv, and what the plant did is the same, event log included.
     with hub(BELT_FMU, tmp_path / "replayed", {"name": "line1"}, replay=tmp_path / "paused") as master:

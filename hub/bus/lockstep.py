@@ -49,7 +49,9 @@ class _Peer:
     slave: object   # hub.logic.remote.RemoteSlave: the bus side knows it by its spec, link and counters
     process: Launched | None = None
     token: str | None = None           # handed to a launched process: its hello must carry it
-    key: bytes | None = None           # the token as the key that seals its steps and outputs
+    key: bytes | None = None           # seals its steps and outputs: the token, or agreed with a joiner
+    hub_key: bytes | None = None       # a joiner's: the hub's X25519 public key in its last welcome
+    warned_unsealed: bool = False      # a joiner without `key` was named once
     refused: str = ""                  # why the last hello under its name was refused (for the time-out message)
     id: str | None = None              # the participant's own id, from its hello
     welcomed: bool = False
@@ -62,7 +64,7 @@ class _Peer:
     in_scenario_order: bool = True     # its outputs come in the scenario's order
     result_n: int | None = None
     result: list | None = None
-    pending: bytes | None = None       # the last step message, re-sent to a participant that rejoins
+    pending: bytes | None = None       # the last step message (unsealed), re-sent to a participant that rejoins
     from_tick: int = 0                 # where its next (or re-sent) step starts
     sent_at: float = 0.0
     step_pub: object = None
@@ -191,12 +193,12 @@ class Lockstep:
         peer = slave.peer
         if peer.in_order is not None:
             values = [values[i] for i in peer.in_order]
-        peer.pending = message = wire.seal(peer.key, wire.step_message(slave.sent, tick, ticks, t, h, values))
+        peer.pending = body = wire.step_message(slave.sent, tick, ticks, t, h, values)
         slave.sent += 1
         peer.from_tick = tick
         self.tick = tick + ticks   # the point at which the run now waits for the answers
         peer.sent_at = time.monotonic()
-        peer.step_pub.put(message)
+        peer.step_pub.put(wire.seal(peer.key, body))
 
     def collect(self, slave) -> list:
         """The outputs of the last step sent to `slave` (before any step: its initial outputs)."""
@@ -329,6 +331,7 @@ class Lockstep:
                 raise wire.WireError("the hello has no string `id`")
             inputs = wire.read_interface(hello.get("inputs"), "inputs")
             outputs = wire.read_interface(hello.get("outputs"), "outputs")
+            key = wire.read_public_key(hello["key"]) if "key" in hello else None
         except wire.WireError as exc:
             try:
                 sent = wire.unpack(message.payload)
@@ -344,7 +347,9 @@ class Lockstep:
             return
         if peer.welcomed and not peer.lost:
             if ident == peer.id:
-                self._welcome(name, ident)   # its welcome was lost: say it again
+                # Its welcome was lost, or it thought it had lost the hub: the same welcome again,
+                # with the same `key`, so the seal key stays (a process that copied the id gains nothing).
+                self._welcome(name, ident)
             else:
                 self._refuse(peer, ident, f"participant {name!r} is already on the bus (id {peer.id})")
             return
@@ -361,9 +366,24 @@ class Lockstep:
                 raise SimulationError(error)   # the process the hub launched will not change: stop now
             self._refuse(peer, ident, error, answered=True)   # one that joins may be a stranger: wait on
             return
+        hub_key = seal = None
+        if peer.token is None and key is not None:   # it joined by itself: agree on its seal key
+            private, hub_key = wire.key_pair()
+            try:
+                seal = wire.seal_key(private, key, self.run, name, ident)
+            except wire.WireError as exc:
+                self._welcome(name, ident, error=f"bad hello: {exc}")
+                return
+        spec = peer.slave.spec
+        if peer.token is None:
+            peer.key, peer.hub_key = seal, hub_key
+            if key is None and not peer.warned_unsealed and self.bus.settings.control is None:
+                peer.warned_unsealed = True   # under run.bus.access, mutual TLS and the ACL keep strangers off
+                self.warn(f"{spec.label} joined without a key (its hello has no `key`): its steps and outputs "
+                          f"are not sealed, so any process on the bus can answer in its place "
+                          f"(schemas/wire.md, \"Sealed messages\")")
         in_names = [n for n, _ in inputs]
         out_names = [n for n, _ in outputs]
-        spec = peer.slave.spec
         in_order = [[n for n, _ in spec.inputs].index(n) for n in in_names]
         peer.in_order = None if in_order == sorted(in_order) else in_order
         peer.out_order = [out_names.index(n) for n, _ in spec.outputs]
@@ -389,6 +409,8 @@ class Lockstep:
             body = {"protocol": wire.PROTOCOL, "id": ident, "accepted": True, "run": self.run, "rate": self.rate,
                     "tick": start, "time": start / self.rate, "lease": self.lease,
                     "parameters": peer.slave.spec.parameters}
+            if peer.hub_key is not None:   # a joiner that sent `key`: the hub's half of its seal key
+                body["key"] = peer.hub_key
         else:
             body = {"protocol": wire.PROTOCOL, "id": ident, "accepted": False, "error": error}
         publisher = self.peers[name].welcome_pub if name in self.peers else None
@@ -427,7 +449,7 @@ class Lockstep:
         self._wait_ready([peer], "rejoin", done=lambda p: p.ready or answered(p))
         if not answered(peer):
             peer.sent_at = time.monotonic()
-            peer.step_pub.put(peer.pending)
+            peer.step_pub.put(wire.seal(peer.key, peer.pending))   # a joiner that rejoined has a new key
         peer.lost, peer.welcomed = False, True
         self.publish_state("running")
         self.log(f"resumed: {spec.label} {'rejoined' if peer.ready else 'answered late'}")

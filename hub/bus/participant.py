@@ -210,10 +210,12 @@ class _Link:
         self.hub_alive = False
         self.lost_at = None       # when the hub's token went away, while it is away
         self.last = None          # (step number, output message) of the last step served
-        # Launched by the hub: its token seals steps and outputs, so no other process can speak
-        # for either side (schemas/wire.md, "Sealed messages").
-        token = os.environ.get("PLANTHUB_TOKEN")
-        self.key = token.encode("ascii") if token else None
+        # Steps and outputs are sealed, so no other process can speak for either side (schemas/wire.md,
+        # "Sealed messages"): launched by the hub, with its token; joined by itself, with a key agreed
+        # in the hello and the welcome (a new one at every join).
+        self.token = os.environ.get("PLANTHUB_TOKEN") or None
+        self.key = self.token.encode("ascii") if self.token else None
+        self.hub_key = None       # a joiner: the hub's public key in the last welcome
         self.foreign = 0          # step messages that did not open with the key: not ours, dropped
 
     def __enter__(self):
@@ -281,8 +283,11 @@ class _Link:
         deadline = time.monotonic() + limit
         hello = {"protocol": wire.PROTOCOL, "name": self.name, "id": self.id, "agent": wire.AGENT,
                  "inputs": wire.interface(self.inputs), "outputs": wire.interface(self.outputs)}
-        if os.environ.get("PLANTHUB_TOKEN"):   # launched by the hub: prove it is the process it started
-            hello["token"] = os.environ["PLANTHUB_TOKEN"]
+        private = None
+        if self.token:   # launched by the hub: prove it is the process it started
+            hello["token"] = self.token
+        else:            # joined by itself: our half of the seal key, fresh for every join
+            private, hello["key"] = wire.key_pair()
         hello = wire.pack(hello)
         sent_at = None
         while True:
@@ -309,6 +314,17 @@ class _Link:
                 break
             elif kind == "state" and _map(value).get("state") == "stopped":
                 raise PlanthubError(f"the run stopped before I could {'re' if self.last else ''}join")
+        if private is not None:
+            if "key" in welcome:
+                hub_key = wire.read_public_key(welcome["key"], "the welcome's `key`")
+                if hub_key != self.hub_key or self.key is None:
+                    self.key = wire.seal_key(private, hub_key, self.run, self.name, self.id)
+                # else: the welcome of our last join, again: the hub never lost us, the seal key stays
+                self.hub_key = hub_key
+            else:   # a hub that does not seal joiners' messages (it ignored our `key`)
+                self.key = self.hub_key = None
+                _log.warning(f"planthub participant {self.name!r}: the hub's welcome has no `key`: steps and "
+                             f"outputs are not sealed, any process on the bus can answer in my place")
         if self.last is None:
             self.logic.begin(dict(welcome.get("parameters") or {}), float(welcome.get("time", 0.0)))
         self.output.put(wire.seal(self.key, wire.output_message(-1, self.logic.current_outputs() if self.last is None

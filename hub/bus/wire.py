@@ -211,12 +211,12 @@ def output_message(n: int, outputs: list) -> bytes:
     return _hot.pack([n, outputs])
 
 
-# --- sealed lockstep messages: a launched participant and its hub share a per-run key ----------
+# --- sealed lockstep messages: the hub and each participant share a key ------------------------
 SEAL = 16   # bytes of HMAC-SHA256 before the message
 
 
 def seal(key: bytes | None, body: bytes) -> bytes:
-    """The message as it goes between the hub and a participant it launched (None: unsealed):
+    """The message as it goes between the hub and a participant (None: unsealed, a joiner without `key`):
     the first 16 bytes of HMAC-SHA256(key, body), then the body. Another process on the bus may
     read it, but cannot make one that opens."""
     return body if key is None else hmac.digest(key, body, "sha256")[:SEAL] + body
@@ -230,6 +230,53 @@ def unseal(key: bytes | None, payload: bytes) -> bytes:
     if len(payload) < SEAL or not hmac.compare_digest(hmac.digest(key, body, "sha256")[:SEAL], payload[:SEAL]):
         raise WireError("not sealed with this participant's key: another process's message")
     return body
+
+
+# A participant that joins by itself has no token: it agrees on its seal key with the hub in the
+# hello and the welcome, each carrying an ephemeral X25519 public key (schemas/wire.md, item 7).
+# `cryptography` is imported only here, when a joiner joins: `import hub.participant` stays light.
+PUBLIC_KEY = 32                   # bytes of an X25519 public key, as `key` carries it (msgpack bin)
+SEAL_INFO = b"planthub seal 1"    # HKDF info: this, then the run's name, the participant's and the hello's id
+
+
+def _what(value) -> str:
+    """A value's kind in msgpack's words, for a message about it."""
+    if isinstance(value, (bytes, bytearray)):
+        return f"{len(value)} bytes"
+    return {bool: "a boolean", int: "an integer", float: "a float", str: "a string", list: "an array",
+            dict: "a map", type(None): "nil"}.get(type(value), type(value).__name__)
+
+
+def read_public_key(value, what: str = "`key`") -> bytes:
+    """The 32 raw bytes of an X25519 public key in a hello or a welcome; WireError for anything else."""
+    if not isinstance(value, (bytes, bytearray)) or len(value) != PUBLIC_KEY:
+        raise WireError(f"{what} must be an X25519 public key: {PUBLIC_KEY} raw bytes (msgpack bin), "
+                        f"got {_what(value)}")
+    return bytes(value)
+
+
+def key_pair():
+    """A fresh ephemeral X25519 key pair: (private key, its public key's 32 raw bytes)."""
+    from cryptography.hazmat.primitives.asymmetric.x25519 import X25519PrivateKey
+
+    private = X25519PrivateKey.generate()
+    return private, private.public_key().public_bytes_raw()
+
+
+def seal_key(private, public: bytes, run: str, name: str, ident: str) -> bytes:
+    """The key that seals a joiner's steps and outputs: HKDF-SHA256 (no salt) of the X25519 secret
+    shared by `private` and the other side's `public`, info = SEAL_INFO + run + name + the hello's
+    id (UTF-8), 32 bytes. WireError if `public` gives no secret (a low-order point)."""
+    from cryptography.hazmat.primitives import hashes
+    from cryptography.hazmat.primitives.asymmetric.x25519 import X25519PublicKey
+    from cryptography.hazmat.primitives.kdf.hkdf import HKDF
+
+    try:
+        shared = private.exchange(X25519PublicKey.from_public_bytes(public))
+    except ValueError:
+        raise WireError("`key` is not a usable X25519 public key (it gives no shared secret)") from None
+    info = SEAL_INFO + run.encode("utf-8") + name.encode("utf-8") + ident.encode("utf-8")
+    return HKDF(algorithm=hashes.SHA256(), length=32, salt=None, info=info).derive(shared)
 
 
 def error_message(n: int, error: str, trace: str = "") -> bytes:
