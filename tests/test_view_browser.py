@@ -5,19 +5,14 @@ its Stop button — the hub records the command and the bottles on that belt sta
     planthub run bottling_plant.yaml --realtime 0.5 --listen … ◄── Zenoh ──► planthub view ◄── http, /ws ── chromium
 """
 import math
-import os
 
 import pytest
 
 from .helpers import ROOT
-from .view_support import command_rows, hub, view
+from .view_support import browser_page, command_rows, hub, view
 
 SCENARIO = ROOT / "scenarios" / "bottling_plant.yaml"
 RUN = "bottling_plant"
-CHROMIUM = "/usr/bin/chromium"
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
-BUNDLE = ROOT / "build" / "view" / "index.html"
 # The magazine b00 (x from -7.0 to 0.07, along y = 0) carries the depalletiser's bottles from the
 # first second on; it first stops by itself when its first bottle reaches the separator, after
 # 14 s of plant time (28 s here). Its bottles are taken from x = -6.3 on, clear of the spots where
@@ -37,23 +32,10 @@ def moved(before: dict, after: dict) -> list[float]:
 
 @pytest.fixture(scope="module")
 def page(tmp_path_factory):
-    from playwright.sync_api import sync_playwright
-
-    assert BUNDLE.is_file(), f"no {BUNDLE}: build the front-end with `make view-assets`"
-    assert os.access(CHROMIUM, os.X_OK), f"no {CHROMIUM}: `make chromium` installs it"
     folder = tmp_path_factory.mktemp("browser")
     with hub(folder, SCENARIO, realtime=0.5) as (started, endpoint, run_dir), \
-            view(folder, RUN, endpoint) as (_, url), sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True, timeout=60_000)
-        try:
-            tab = browser.new_page(viewport={"width": 960, "height": 640})
-            errors: list[str] = []
-            tab.on("pageerror", lambda exc: errors.append(str(exc)))
-            tab.goto(url, timeout=60_000)
-            tab.wait_for_function("window.planthub && window.planthub.connected", timeout=60_000)
-            yield tab, run_dir, errors
-        finally:
-            browser.close()
+            view(folder, RUN, endpoint) as (_, url), browser_page(url) as (tab, errors):
+        yield tab, run_dir, errors
         assert started.proc.poll() is None, started.output()
 
 

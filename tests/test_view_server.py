@@ -16,7 +16,7 @@ from hub.view.browser import Browser
 from hub.view.http import WRITER_LIMIT, _inside
 
 from .helpers import ROOT
-from .view_support import bodies, command_rows, end, hub, planthub, receive, view, wait_for
+from .view_support import bodies, command_rows, end, hub, planthub, receive, talk, view, wait_for
 
 RUN = "source_sink"
 SCENARIO = ROOT / "scenarios" / "source_sink.yaml"
@@ -31,15 +31,6 @@ def plant(tmp_path_factory):
             view(folder, RUN, endpoint) as (started_view, url):
         yield endpoint, run_dir, url, started_view
         assert started_hub.proc.poll() is None, started_hub.output()
-
-
-def talk(url, conversation, **headers):
-    """Run `conversation(ws)` against the view's WebSocket; its result."""
-    async def main():
-        async with aiohttp.ClientSession(timeout=aiohttp.ClientTimeout(total=90)) as session:
-            async with session.ws_connect(f"{url}ws", headers=headers, heartbeat=None) as ws:
-                return await conversation(ws)
-    return asyncio.run(main())
 
 
 async def greeting(ws) -> dict:
@@ -130,7 +121,7 @@ def test_a_browser_command_reaches_the_hub_is_recorded_and_stops_the_belts_bottl
 @pytest.mark.parametrize("sent, error", [
     ("{not json", "not JSON: Expecting property name enclosed in double quotes: line 1 column 2 (char 1)"),
     ("[1, 2]", "expected a JSON object with a type, got [1, 2]"),
-    ('{"type": "shout"}', 'unknown type "shout": expected command or rate'),
+    ('{"type": "shout"}', 'unknown type "shout": expected command, rate or playback'),
     ('{"type": "command", "op": "explode"}',
      'unknown op "explode": expected one of set, force, release, stop, pause, resume, step, pace'),
     ('{"type": "command", "op": "force", "slot": "belt", "value": false}',
@@ -140,6 +131,8 @@ def test_a_browser_command_reaches_the_hub_is_recorded_and_stops_the_belts_bottl
     ('{"type": "rate", "period": "fast"}',
      'rate takes a period in s, more than 0 and at most 3600, or null; got "fast"'),
     (b"\x00\x01", "expected a JSON text frame, got a binary one"),
+    ('{"type": "playback", "op": "play"}',
+     "this view shows the run 'source_sink' live: playback is for a recorded run (`planthub view RUN_DIR`)"),
 ])
 def test_a_malformed_frame_gets_an_error_frame_and_the_view_goes_on(plant, sent, error):
     endpoint, run_dir, url, started = plant
@@ -234,11 +227,13 @@ def test_a_run_nobody_serves_is_named_with_its_endpoint(plant, tmp_path):
         "there (--listen on that endpoint), and is the run named 'no_such_run' (its scenario's name)?")
 
 
-def test_a_folder_is_refused_playback_is_not_built_yet(tmp_path):
+def test_a_folder_with_connect_is_refused_and_told_how_to_play_it_back(tmp_path):
     with planthub(tmp_path, "folder", "view", "runs/bottling_plant", "--connect", "tcp/127.0.0.1:9") as started:
         assert started.proc.wait(30) == 2
-    assert "names a folder" in started.output()[1] and "playback of a recorded run folder is not built yet" \
-        in started.output()[1]
+    assert started.output()[1].strip() == (
+        "planthub: runs/bottling_plant names a folder, and --connect joins a running plant by its run's name "
+        "(`planthub view bottling_plant --connect tcp/127.0.0.1:7447`); to play the recorded run back, leave out "
+        "--connect: `planthub view runs/bottling_plant`")
 
 
 def test_a_browser_that_does_not_read_makes_no_queue_and_gets_the_newest_bodies_frame():

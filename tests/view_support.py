@@ -1,4 +1,4 @@
-"""Helpers for the view's tests: a real hub (`planthub run … --listen`) and a real `planthub view` as processes, always stopped."""
+"""Helpers for the view's tests: a real hub (`planthub run … --listen`), a real recorded run, a real `planthub view` as processes, always stopped, and Debian's chromium driven by Playwright."""
 from __future__ import annotations
 
 import asyncio
@@ -74,6 +74,61 @@ def view(folder: Path, run: str, endpoint: str, *args, name: str = "view-test", 
     """`planthub view RUN --connect ENDPOINT --port 0`, once it printed its address; yields (Started, url)."""
     with planthub(folder, name, "view", run, "--connect", endpoint, "--port", 0, "--name", name, *args) as started:
         yield started, wait_for_url(started, timeout)
+
+
+def record(folder: Path, scenario: Path, *args, timeout: float = 120.0) -> Path:
+    """A recorded run: `planthub run SCENARIO --record-bodies --out FOLDER/recorded ARGS…`; its folder."""
+    out = folder / "recorded"
+    done = subprocess.run([sys.executable, "-m", "hub", "run", str(scenario), "--record-bodies", "--out", str(out),
+                           *map(str, args)], cwd=ROOT, capture_output=True, text=True, timeout=timeout,
+                          stdin=subprocess.DEVNULL)
+    assert done.returncode == 0, done.stderr
+    return out
+
+
+@contextlib.contextmanager
+def playback(folder: Path, run_dir: Path, *args, name: str = "playback", timeout: float = 60.0):
+    """`planthub view RUN_DIR --port 0`, once it printed its address; yields (Started, url)."""
+    with planthub(folder, name, "view", run_dir, "--port", 0, *args) as started:
+        yield started, wait_for_url(started, timeout)
+
+
+CHROMIUM = "/usr/bin/chromium"
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+BUNDLE = ROOT / "build" / "view" / "index.html"
+
+
+@contextlib.contextmanager
+def browser_page(url: str, viewport=(960, 640)):
+    """The page at `url` in headless chromium, once its socket is open; yields (page, page errors).
+    The browser is closed whatever happens."""
+    from playwright.sync_api import sync_playwright
+
+    assert BUNDLE.is_file(), f"no {BUNDLE}: build the front-end with `make view-assets`"
+    assert os.access(CHROMIUM, os.X_OK), f"no {CHROMIUM}: `make chromium` installs it"
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True, timeout=60_000)
+        try:
+            tab = browser.new_page(viewport={"width": viewport[0], "height": viewport[1]})
+            errors: list[str] = []
+            tab.on("pageerror", lambda exc: errors.append(str(exc)))
+            tab.goto(url, timeout=60_000)
+            tab.wait_for_function("window.planthub && window.planthub.connected", timeout=60_000)
+            yield tab, errors
+        finally:
+            browser.close()
+
+
+def talk(url, conversation, **headers):
+    """Run `conversation(ws)` against the view's WebSocket (aiohttp's client); its result."""
+    import aiohttp
+
+    async def main():
+        async with aiohttp.ClientSession(timeout=aiohttp.ClientTimeout(total=90)) as session:
+            async with session.ws_connect(f"{url}ws", headers=headers, heartbeat=None) as ws:
+                return await conversation(ws)
+    return asyncio.run(main())
 
 
 def wait_for_url(started: Started, timeout: float) -> str:

@@ -58,7 +58,7 @@ def add_commands(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str 
 def bus_settings(args, scenario: Scenario) -> BusSettings | None:
     """The hub's bus settings: the scenario's `run.bus` with the command line's overrides, or None."""
     settings = scenario.run.bus
-    flags = args.bus or args.listen or args.connect or args.mode
+    flags = args.bus or args.listen or args.connect or args.mode or getattr(args, "view", False)   # --view: --bus
     if settings is None and not flags:
         return None
     settings = settings or BusSettings()

@@ -14,6 +14,7 @@ from hub.cli.exits import BAD_SCENARIO, FAILED, INTERRUPTED, OK, TABLE, USAGE, U
 from hub.cli.logs import diagnostics
 from hub.cli.options import add_run_arguments, add_set, overrides, verbosity, verbosity_parent
 from hub.cli.plot import add_command as add_plot_command
+from hub.cli.run_view import add_arguments as add_view_arguments
 from hub.cli.running import run_command, test_command
 from hub.cli.view import add_command as add_view_command
 from hub.core.errors import PlanthubError, ScenarioError
@@ -69,6 +70,7 @@ def parser() -> tuple[argparse.ArgumentParser, dict]:
                   "Run a scenario headless. Prints the run summary — how the run ended, the plant's\n"
                   "figures, time, events — and writes recording.csv, events.csv and summary.json.")
     add_run_arguments(run, "folder for recording.csv, events.csv and summary.json (default: runs/<name>)")
+    add_view_arguments(run)
 
     check = command("validate", "check a scenario without running it",
                     "planthub validate my_plant.yaml --set run.physics_rate=1000")

@@ -28,19 +28,25 @@ def run_command(args) -> int:
     _check_replay(args, out)
     bus, pacer = _bus(args, scenario), _pacer(args, scenario)
     progress = [_Progress(scenario.run.end_tick)] if sys.stderr.isatty() and verbosity(args) >= 0 else []
+    view = _view(args, scenario)
     try:
         # signals: a Ctrl-C or SIGTERM ends the run at its next point, summary and files complete.
-        run = Run(scenario, out=out, bus=bus, replay=args.replay, pacer=pacer, observers=progress, signals=True)
+        run = Run(scenario, out=out, bus=bus, replay=args.replay, pacer=pacer, signals=True,
+                  observers=progress + ([view] if view is not None else []))
         try:
             with run:
                 _log.debug(f"running {scenario.name} to t = {scenario.run.end_tick / scenario.run.physics_rate:g} s, "
                            f"writing to {out}")
+                if view is not None:
+                    _start_view(view, run, bus)
                 result = run.run()
                 run.close(result.stopped_by or "the run reached its end")
         except KeyboardInterrupt:   # one that came outside the run's own handling (hub/run/interruption.py)
             _print_run(run, args)   # the figures so far; summary.json says it was interrupted
             raise
     finally:
+        if view is not None:
+            view.stop()   # the run closed it, unless the run failed before its master was made
         if bus is not None:
             bus.close()
     _print_run(run, args)
@@ -161,6 +167,28 @@ def _bus(args, scenario):
     from hub.bus.session import Bus   # Zenoh is loaded only for a run on the bus
 
     return Bus(settings)
+
+
+def _view(args, scenario):
+    """With --view: the run's view, to be started once the run is (RunView); None without --view."""
+    if not getattr(args, "view", False):
+        return None
+    from hub.cli.run_view import RunView
+
+    if not args.realtime:
+        _log.warning("planthub run: note: --view without --realtime: the run goes as fast as it can, and its view "
+                     "ends with it")
+    return RunView(scenario.name, port=args.view_port)
+
+
+def _start_view(view, run, bus) -> None:
+    """The run started (its scene answered on the bus), then its view, once it serves the page; its
+    address printed."""
+    run.start()
+    view.start(bus)
+    url = view.wait()   # a PlanthubError ends the run before its first step; the run closes the view
+    print(f"planthub run: the view of run {run.scenario.name!r} at {url}  (open it in a browser; pid {view.pid}, "
+          "it ends with the run)", flush=True)
 
 
 def _pacer(args, scenario):

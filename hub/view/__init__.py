@@ -1,1 +1,1 @@
-"""Seeing the plant: the hub's side (scene.py, broadcast.py: the scene and every body on the bus) and `planthub view`, a browser's window on a running plant, joined over the bus as a live participant."""
+"""Seeing the plant: the hub's side (scene.py, broadcast.py: the scene and every body on the bus), `planthub view`, a browser's window on a running plant, joined over the bus as a live participant, and the playback of a recorded run from its folder (run_folder.py, playback.py)."""

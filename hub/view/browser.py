@@ -18,6 +18,8 @@ _log = logging.getLogger("planthub.view")
 MAX_TEXTS = 512        # text frames waiting for one browser before it is closed as too slow
 SEND_TIMEOUT = 10.0    # s one frame may take to go out before the browser is given up
 TOO_SLOW = 1013        # WebSocket close code "try again later"
+GOING_AWAY = 1001      # WebSocket close code of a server that stops
+SHUTDOWN = 3.0         # s the sockets have to close at the end
 
 
 class Browser:
@@ -72,3 +74,13 @@ class Browser:
         self.closing = True
         _log.warning("planthub view: closing the socket of %s: too slow (%s)", self.peer or "a browser", why)
         self._closer = asyncio.get_running_loop().create_task(self.socket.close(code=TOO_SLOW, message=b"too slow"))
+
+
+async def close_browsers(browsers, timeout: float = SHUTDOWN) -> None:
+    """Close every browser's socket ("going away"), waiting at most `timeout` s for them all."""
+    browsers = list(browsers)
+    for browser in browsers:
+        browser.closing = True
+    closing = [asyncio.ensure_future(b.socket.close(code=GOING_AWAY, message=b"the view stops")) for b in browsers]
+    if closing:
+        await asyncio.wait(closing, timeout=timeout)

@@ -1,7 +1,8 @@
 """The WebSocket protocol between the view and a browser: what a browser may send, checked, and the JSON text frames the view sends (/root/logs/view_spec.md).
 
 A browser's frame that is not one of these gets an error frame back naming what is wrong; the
-view goes on. The hub checks a command's slot and value again (hub/bus/commands.py), with its
+view goes on. Commands and rate requests go to a live run; playback requests (play, pause, speed,
+seek) to a recorded one's playback (hub/view/playback.py). The hub checks a command's slot and value again (hub/bus/commands.py), with its
 did-you-mean: here only the shape is checked, so that nothing malformed goes on the bus.
 """
 from __future__ import annotations
@@ -21,6 +22,9 @@ MAX_FRAME = 64 * 1024
 MAX_REF = 64          # characters of the browser's own id for a command, echoed in its result
 MAX_STEP = 100_000    # points a single step command may ask for
 MAX_PERIOD = 3600.0   # s: the slowest bodies rate a browser may ask for
+#: what a browser may ask of a recorded run's playback (`planthub view RUN_DIR`), and its speeds
+PLAYBACK_OPS = ("play", "pause", "speed", "seek")
+SPEEDS = (0.1, 10.0)
 
 
 class FrameError(PlanthubError):
@@ -40,7 +44,13 @@ class RateRequest:
     period: float | None   # s of plant time between two bodies messages; None: the hub's default
 
 
-def parse(text) -> CommandRequest | RateRequest:
+@dataclass(frozen=True)
+class PlaybackRequest:
+    op: str                # play, pause, speed, seek
+    value: float | None = None   # speed: a factor of the recorded pace; seek: a time, s
+
+
+def parse(text) -> CommandRequest | RateRequest | PlaybackRequest:
     """A browser's text frame → the request it makes, or FrameError."""
     if not isinstance(text, str):
         raise FrameError("expected a JSON text frame (binary frames go only from the view to the browser)")
@@ -57,7 +67,9 @@ def parse(text) -> CommandRequest | RateRequest:
         return _command(message)
     if kind == "rate":
         return _rate(message)
-    raise FrameError(f"unknown type {_shown(kind)}: expected command or rate")
+    if kind == "playback":
+        return _playback(message)
+    raise FrameError(f"unknown type {_shown(kind)}: expected command, rate or playback")
 
 
 def _command(message: dict) -> CommandRequest:
@@ -96,6 +108,23 @@ def _rate(message: dict) -> RateRequest:
         raise FrameError(f"rate takes a period in s, more than 0 and at most {MAX_PERIOD:g}, or null; "
                          f"got {_shown(period)}")
     return RateRequest(None if period is None else float(period))
+
+
+def _playback(message: dict) -> PlaybackRequest:
+    op, value = message.get("op"), message.get("value")
+    if op not in PLAYBACK_OPS:
+        raise FrameError(f"unknown playback op {_shown(op)}: expected one of {', '.join(PLAYBACK_OPS)}")
+    if op in ("play", "pause"):
+        if value is not None:
+            raise FrameError(f"{op} takes no value, got {_shown(value)}")
+        return PlaybackRequest(op)
+    if op == "speed":
+        if not _number(value) or not SPEEDS[0] <= value <= SPEEDS[1]:
+            raise FrameError(f"speed takes a factor of the recorded pace from {SPEEDS[0]:g} to {SPEEDS[1]:g}, "
+                             f"got {_shown(value)}")
+    elif not _number(value):
+        raise FrameError(f"seek takes a time in s of the recorded run, got {_shown(value)}")
+    return PlaybackRequest(op, float(value))
 
 
 def _integer(value) -> bool:

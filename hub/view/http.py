@@ -9,15 +9,21 @@ whose name was made to point at 127.0.0.1 sends its own name).
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import ipaddress
+import logging
+import signal
 from pathlib import Path
 from urllib.parse import urlsplit
 
 from aiohttp import WSMsgType, web
 
 from hub.core import resources
-from hub.view.browser import Browser
+from hub.core.errors import PlanthubError
+from hub.view.browser import SHUTDOWN, Browser
 from hub.view.frames import MAX_FRAME, frame
+
+_log = logging.getLogger("planthub.view")
 
 #: the front-end, as `make view-assets` builds it from hub/view/web/
 BUNDLE = resources.ROOT / "build" / "view"
@@ -85,6 +91,50 @@ def application(view, bundle: Path = BUNDLE, *, loopback: bool = True) -> web.Ap
     app.router.add_get("/pybullet_data/{path:.+}", robots)
     app.router.add_get("/ws", socket)
     return app
+
+
+@contextlib.contextmanager
+def signal_stop(loop: asyncio.AbstractEventLoop):
+    """A future that the first SIGINT or SIGTERM completes with its number, while in the block."""
+    stop: asyncio.Future = loop.create_future()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(signum, lambda s=signum: stop.done() or stop.set_result(s))
+    try:
+        yield stop
+    finally:
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            loop.remove_signal_handler(signum)
+
+
+async def serve_page(view, stop: asyncio.Future, *, host: str, port: int, bundle: Path = BUNDLE, announce=print,
+                     opened=None) -> int:
+    """Serve `view`'s page and socket (the live View or a recorded run's Playback) on host:port until
+    `stop` has a signal number; 128 + that number. `announce(url)` once it is served, `opened(url)`
+    may open it in a browser; `view.close()` at the end."""
+    problem = missing_bundle(bundle)
+    if problem:
+        _log.warning("planthub view: warning: %s", problem)
+    runner = web.AppRunner(application(view, bundle, loopback=is_loopback(host)), access_log=None,
+                           handle_signals=False)
+    await runner.setup()
+    try:
+        site = web.TCPSite(runner, host, port, shutdown_timeout=SHUTDOWN)
+        try:
+            await site.start()
+        except OSError as exc:
+            raise PlanthubError(f"cannot serve on {host}:{port}: {exc.strerror or exc}"
+                                + (" (another view? --port picks another)" if port else "")) from None
+        bound = runner.addresses[0][1]
+        shown = "127.0.0.1" if host in ("0.0.0.0", "::", "") else host   # every address: this machine's is one
+        url = f"http://{'[' + shown + ']' if ':' in shown else shown}:{bound}/"
+        announce(url)
+        if opened is not None:
+            asyncio.get_running_loop().run_in_executor(None, opened, url)
+        signum = await stop
+    finally:
+        await view.close()
+        await runner.cleanup()
+    return 128 + signum
 
 
 def _inside(root: Path, relative: str) -> web.StreamResponse:

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import signal
 import time
 from collections import OrderedDict, deque
 from concurrent.futures import ThreadPoolExecutor
@@ -21,6 +20,7 @@ from hub.bus import wire
 from hub.core.errors import PlanthubError
 from hub.view import frames
 from hub.view.bridge import Bridge
+from hub.view.browser import close_browsers
 from hub.view.relay import SPEEDS_PERIOD, Relay, ViewError, slot_sample
 
 _log = logging.getLogger("planthub.view")
@@ -32,7 +32,6 @@ MAX_IN_FLIGHT = 64       # commands of all browsers waiting to go on the bus
 MAX_PENDING = 256        # commands waiting for their answer (older ones are forgotten)
 KEPT_EVENTS = 500        # event rows a browser that connects late is given
 SLOTS_FLUSH = 0.05       # s the belt speeds of one point are gathered before they go to the browsers
-SHUTDOWN = 3.0           # s the web side has to close its sockets at the end
 
 
 class View:
@@ -48,6 +47,7 @@ class View:
         self.control = control
         self.scene: str | None = None          # the scene frame, once the hub answered
         self.state = self.figures = None      # the last frames of each, for a browser that comes late
+        self.stopped: str | None = None       # why the run stopped, once its state said so
         self.bodies: bytes | None = None
         self.events: deque = deque(maxlen=KEPT_EVENTS)
         self.hub_alive = self._hub_seen = False
@@ -83,7 +83,9 @@ class View:
         self.figures = self._broadcast("figures", self._map(payload, "figures"))
 
     def _on_state(self, payload: bytes) -> None:
-        self.state = self._broadcast("state", self._map(payload, "state"))
+        state = self._map(payload, "state")
+        self.stopped = state.get("reason", "") if state.get("state") == "stopped" else None
+        self.state = self._broadcast("state", state)
 
     def _on_events(self, payload: bytes) -> None:
         rows = wire.unpack(payload)
@@ -120,7 +122,11 @@ class View:
         self.hub_alive = alive
         self._broadcast("hub", {"alive": alive})
         if not alive:
-            _log.warning("planthub view: the hub of run %r went away (%s); waiting for it", self.run, self.relay.where)
+            if self.stopped is not None:   # it said so before it left: no surprise
+                _log.info("planthub view: the run %r stopped (%s); waiting for another", self.run, self.stopped)
+            else:
+                _log.warning("planthub view: the hub of run %r went away (%s); waiting for it", self.run,
+                             self.relay.where)
             return
         # The hub declares its subscribers before its token: a rate request put now reaches it.
         self._put(self.relay.rate, self.relay.speeds, SPEEDS_PERIOD)
@@ -168,6 +174,10 @@ class View:
             self.bodies_period = request.period
             if self.hub_alive:
                 self._put(self.relay.rate, wire.control_key(self.run, "bodies"), request.period)
+            return
+        if isinstance(request, frames.PlaybackRequest):
+            browser.send(frames.frame("error", op=request.op, error=f"this view shows the run {self.run!r} live: "
+                                      "playback is for a recorded run (`planthub view RUN_DIR`)"))
             return
         self._command(browser, request)
 
@@ -240,12 +250,7 @@ class View:
         self._closed = True
         for task in list(self._tasks):
             task.cancel()
-        sockets = [b.socket for b in self.browsers]
-        for browser in self.browsers:
-            browser.closing = True
-        if sockets:
-            await asyncio.wait([asyncio.ensure_future(s.close(code=1001, message=b"the view stops")) for s in sockets],
-                               timeout=SHUTDOWN)
+        await close_browsers(self.browsers)
         self._puts.shutdown(wait=False, cancel_futures=True)
         skipped = self.skipped + sum(b.dropped for b in self.browsers)
         if skipped:
@@ -273,52 +278,23 @@ async def serve(relay: Relay, *, host: str, port: int, bundle, control: bool = T
                 timeout: float = 30.0, announce=print, opened=None) -> int:
     """Join the run, serve the browsers until SIGINT or SIGTERM; the exit status (130, 143).
     `announce(url)` tells where to open the page once it is served, `opened(url)` may open it."""
-    from aiohttp import web
-
-    from hub.view.http import application, is_loopback, missing_bundle
+    from hub.view.http import serve_page, signal_stop
 
     loop = asyncio.get_running_loop()
-    stop: asyncio.Future = loop.create_future()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        loop.add_signal_handler(signum, lambda s=signum: stop.done() or stop.set_result(s))
-    view = None
-    try:
-        view = View(relay, control=control, reason=reason)
-        relay.join(Bridge(loop, view.deliver))
-        fetching = loop.create_task(fetch_scene(relay, timeout, lambda: view.hub_alive))
-        await asyncio.wait({fetching, stop}, return_when=asyncio.FIRST_COMPLETED)
-        if stop.done():
-            fetching.cancel()
-            await asyncio.gather(fetching, return_exceptions=True)
-            return 128 + stop.result()
-        view.scene = frames.frame("scene", scene=fetching.result())
-
-        problem = missing_bundle(bundle)
-        if problem:
-            _log.warning("planthub view: warning: %s", problem)
-        runner = web.AppRunner(application(view, bundle, loopback=is_loopback(host)), access_log=None,
-                               handle_signals=False)
-        await runner.setup()
+    with signal_stop(loop) as stop:
+        view = None
         try:
-            site = web.TCPSite(runner, host, port, shutdown_timeout=SHUTDOWN)
-            try:
-                await site.start()
-            except OSError as exc:
-                raise ViewError(f"cannot serve on {host}:{port}: {exc.strerror or exc}"
-                                + (" (another view? --port picks another)" if port else "")) from None
-            bound = runner.addresses[0][1]
-            shown = "127.0.0.1" if host in ("0.0.0.0", "::", "") else host   # every address: this machine's is one
-            url = f"http://{'[' + shown + ']' if ':' in shown else shown}:{bound}/"
-            announce(url)
-            if opened is not None:
-                loop.run_in_executor(None, opened, url)
-            signum = await stop
+            view = View(relay, control=control, reason=reason)
+            relay.join(Bridge(loop, view.deliver))
+            fetching = loop.create_task(fetch_scene(relay, timeout, lambda: view.hub_alive))
+            await asyncio.wait({fetching, stop}, return_when=asyncio.FIRST_COMPLETED)
+            if stop.done():
+                fetching.cancel()
+                await asyncio.gather(fetching, return_exceptions=True)
+                return 128 + stop.result()
+            view.scene = frames.frame("scene", scene=fetching.result())
+            return await serve_page(view, stop, host=host, port=port, bundle=bundle, announce=announce,
+                                    opened=opened)
         finally:
-            await view.close()
-            await runner.cleanup()
-        return 128 + signum
-    finally:
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            loop.remove_signal_handler(signum)
-        if view is not None:
-            await view.close()
+            if view is not None:
+                await view.close()

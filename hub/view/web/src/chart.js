@@ -1,6 +1,7 @@
 // A small time-series chart on a canvas: a few named series over the last `window` seconds of
 // plant time, y scaled to what is visible, a legend. Enough for a handful of live figures
-// without a charting library.
+// without a charting library. With a `span` it draws that whole stretch instead (a recorded run's
+// series, set at once), and a `cursor` marks a time on it.
 
 const PALETTE = ['#4e79a7', '#f28e2b', '#e15759', '#76b7b2', '#59a14f', '#edc948', '#b07aa1',
   '#ff9da7', '#9c755f', '#bab0ac', '#1f77b4', '#2ca02c', '#d62728', '#9467bd', '#8c564b',
@@ -13,8 +14,10 @@ export class Chart {
     this.window = window;
     this.unit = unit;
     this.series = new Map();   // name → {colour, points: [[t, v]]}
+    this.span = null;          // [t0, t1]: draw this stretch, not the last `window` s
+    this.cursor = null;        // a time to mark, s
     this.dirty = true;
-    const figure = document.createElement('figure');
+    const figure = this.figure = document.createElement('figure');
     figure.className = 'chart';
     const caption = document.createElement('figcaption');
     caption.textContent = title;
@@ -43,6 +46,25 @@ export class Chart {
     if (last && t < last[0]) s.points.length = 0;   // time went back: a new run
     s.points.push([t, v]);
     if (s.points.length > MAX_POINTS) s.points.splice(0, s.points.length - MAX_POINTS);
+    this.dirty = true;
+  }
+
+  /** A whole series at once: [[t, v], …] in time order (kept as given, however many). */
+  set(name, points) {
+    let s = this.series.get(name);
+    if (!s) {
+      s = { colour: PALETTE[this.series.size % PALETTE.length], points: [] };
+      this.series.set(name, s);
+      this._legendEntry(name, s.colour);
+    }
+    s.points = points.filter(([, v]) => typeof v === 'number' && Number.isFinite(v));
+    this.dirty = true;
+  }
+
+  /** Mark time t (s); redrawn with the next draw. */
+  mark(t) {
+    if (t === this.cursor) return;
+    this.cursor = t;
     this.dirty = true;
   }
 
@@ -75,12 +97,13 @@ export class Chart {
     }
     if (t1 === -Infinity) return;
     // Until a window's worth has come, the plot spans what there is, so it fills the width.
-    const t0 = Math.max(t1 - this.window, Math.min(first, t1 - 1));
+    let t0 = Math.max(t1 - this.window, Math.min(first, t1 - 1));
+    if (this.span) [t0, t1] = [this.span[0], Math.max(this.span[1], this.span[0] + 1e-6)];
     const span = t1 - t0;
     let lo = 0, hi = -Infinity;
     for (const s of this.series.values()) {
       for (const [t, v] of s.points) {
-        if (t < t0) continue;
+        if (t < t0 || t > t1) continue;
         lo = Math.min(lo, v);
         hi = Math.max(hi, v);
       }
@@ -100,6 +123,14 @@ export class Chart {
         if (started) g.lineTo(x(t), y(v));
         else { g.moveTo(x(t), y(v)); started = true; }
       }
+      g.stroke();
+    }
+    if (this.cursor !== null && this.cursor >= t0 && this.cursor <= t1) {
+      g.strokeStyle = '#1f2328';
+      g.lineWidth = 1;
+      g.beginPath();
+      g.moveTo(x(this.cursor), PAD.top);
+      g.lineTo(x(this.cursor), height - PAD.bottom);
       g.stroke();
     }
   }

@@ -45,6 +45,13 @@ export class EventLog {
     return obj === f || obj.includes(f);
   }
 
+  /** Forget every row (a recorded run played back from an earlier time). */
+  reset() {
+    this.rows.length = 0;   // the same array: the test hook holds it
+    this.body.replaceChildren();
+    this._count(this.filter());
+  }
+
   add(rows) {
     if (!Array.isArray(rows) || !rows.length) return;
     for (const r of rows) this.rows.push(r);

@@ -1,6 +1,7 @@
 // The page's test hooks (view spec, addendum): `window.planthub`, read by the browser test to
 // see what the page saw and drew without scraping pixels. The contract keys are connected,
-// frames, tick, bodies(), events and figures; hello, state, scene and results are extras.
+// frames, tick, bodies(), events and figures; hello, state, scene and results are extras, and
+// playback, for a recorded run.
 
 export function installHooks(bodiesNow) {
   const hooks = {
@@ -14,6 +15,7 @@ export function installHooks(bodiesNow) {
     state: null,        // the last state map {state, tick, time, reason}
     scene: null,        // the scene document drawn
     results: [],        // command results {id, ok, tick, error}, oldest first
+    playback: null,     // a recorded run's playback: {time: plant s drawn, playing, speed}; null: a live run
   };
   window.planthub = hooks;
   return hooks;

@@ -12,6 +12,8 @@ import { Arms } from './arm.js';
 import { Panel } from './panel.js';
 import { Figures, formatNumber } from './figures.js';
 import { Plots } from './plots.js';
+import { PlayBar } from './playbar.js';
+import { RecordedPlots } from './recorded.js';
 import { EventLog } from './events.js';
 import { Picker } from './tooltip.js';
 import { installHooks } from './hooks.js';
@@ -32,6 +34,9 @@ class App {
     this.panel = new Panel(this.$('#panel'), (m) => this.connection.send(m));
     this.figures = new Figures(this.$('#figures'));
     this.plots = new Plots(this.$('#plots'));
+    this.recorded = new RecordedPlots(this.$('#recorded'));
+    this.playbar = new PlayBar(this.$('#playback-bar'), (m) => this.connection.send(m));
+    this.mode = 'live';       // hello's mode: 'playback' for a recorded run (`planthub view RUN_DIR`)
     this.events = new EventLog(document);
     this.hooks.events = this.events.rows;
     this.picker = new Picker(this.stage.canvas, this.$('#tooltip'), {
@@ -63,9 +68,12 @@ class App {
       scene: () => this._scene(m.scene),
       state: () => this._state(m),
       figures: () => this._figures(m),
-      events: () => this.events.add(m.rows),
+      events: () => this._events(m),
       result: () => this._result(m),
       slots: () => this.plots.slots(m),
+      playback: () => this._playbackState(m),
+      recording: () => this.recorded.set(m),
+      error: () => this.playbar.refused(m),
     }[m.type];
     if (handler) handler();   // unknown types: a newer server; ignore, as the spec says for keys
   }
@@ -75,6 +83,28 @@ class App {
     this.$('#run-name').textContent = m.run ?? '—';
     document.title = `planthub view — ${m.run ?? ''}`;
     this.panel.setControl(m.control === true, m.reason);
+    this.mode = m.mode === 'playback' ? 'playback' : 'live';
+    if (this.mode === 'playback') {
+      this.playbar.show(m);
+      this.plots.recordedRun();
+      this.hooks.playback = { time: Number(m.start ?? 0), playing: false, speed: 1 };
+    }
+  }
+
+  /** A recorded run's playback clock changed: a seek (or a start again) is a jump, never interpolated. */
+  _playbackState(m) {
+    this.playbar.state(m);
+    if (m.jump) {
+      this.playback.jump();
+      this._shown = null;
+    }
+    this.playback.setPace(Number(m.speed ?? 1));
+    if (this.hooks.playback) Object.assign(this.hooks.playback, { playing: !!m.playing, speed: Number(m.speed ?? 1) });
+  }
+
+  _events(m) {
+    if (m.reset) this.events.reset();
+    this.events.add(m.rows);
   }
 
   _scene(doc) {
@@ -120,7 +150,8 @@ class App {
     const { type, ...figures } = m;
     this.hooks.figures = figures;
     this.figures.update(figures);
-    this.plots.figures(figures);
+    this.$('#figures-final').hidden = !figures.final;
+    if (!figures.final) this.plots.figures(figures);
   }
 
   _result(m) {
@@ -164,6 +195,11 @@ class App {
     this._last = now;
     const t = this.playback.advance(now / 1000, dt);
     if (this.plant && t !== null) this._draw(t);
+    if (this.mode === 'playback' && t !== null) {
+      this.playbar.update(t);
+      this.recorded.mark(t);
+      this.hooks.playback.time = t;
+    }
     this.stage.rig.update((id) => this.bottles?.find(id)?.position);
     this.picker.update();
     if (this.stage.render()) this.hooks.frames++;

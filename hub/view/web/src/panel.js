@@ -79,8 +79,8 @@ export class Panel {
     box.replaceChildren(
       button('Emergency stop', {}, 'estop'),
       button('Reset', {}, 'reset'),
-      button('Pause', { op: 'pause', value: 'null' }, 'pause'),
-      button('Resume', { op: 'resume', value: 'null' }, 'resume'),
+      button('Pause', { op: 'pause', value: 'null' }, 'run-pause'),
+      button('Resume', { op: 'resume', value: 'null' }, 'run-resume'),
       button('Step', { op: 'step', value: '1' }, 'step'),
       pace, paceButton,
     );

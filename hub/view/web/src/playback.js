@@ -8,6 +8,10 @@
 // arrivals; `offset` is set by the *latest* of them relative to that line, less one sample
 // interval, so the newest sample is almost always ahead of the clock and the clock never has to
 // wait — it stays smooth even when messages come in bunches.
+//
+// A recorded run's playback (`planthub view RUN_DIR`) knows its pace — the speed the trainer
+// chose — so it is set, not fitted (setPace), and a seek is a jump: what was kept belongs to
+// another time, so it is dropped and nothing is interpolated across it (jump).
 
 const KEEP = 16;             // samples kept for interpolation: enough to bridge a late frame or two
 const FIT = 60;              // arrivals the pace is fitted to (3 s at 20 Hz)
@@ -19,6 +23,20 @@ const GAP = 1.0;             // wall s: a longer silence (paused, stepping) star
 export class Playback {
   constructor() {
     this.rate = 1.0;         // plant seconds per wall second; kept across clears
+    this.fixed = false;      // the rate is set (a recorded run's speed), not fitted
+    this.clear();
+  }
+
+  /** A known pace (plant s per wall s), as a recorded run's playback has it; null: fit it again. */
+  setPace(rate) {
+    const changed = rate !== null && rate !== this.rate;
+    this.fixed = rate !== null;
+    if (this.fixed) this.rate = rate;
+    if (changed) this.arrivals.length = 0;   // the line through the arrivals has another slope now
+  }
+
+  /** The plant time jumped (a seek): drop the samples, so the next one is shown as it is. */
+  jump() {
     this.clear();
   }
 
@@ -55,6 +73,7 @@ export class Playback {
 
   /** Least squares slope of plant time over wall time, once the arrivals span a while. */
   _fitRate() {
+    if (this.fixed) return;
     const a = this.arrivals, n = a.length;
     if (n < 4 || a[n - 1][0] - a[0][0] < 0.3) return;
     let sw = 0, sp = 0;

@@ -29,6 +29,11 @@ export class Plots {
     for (const chart of [this.speeds, this.bottles, this.pace]) chart.clear();
   }
 
+  /** A recorded run: its figures are the final ones, so the two charts drawn from them over time go. */
+  recordedRun() {
+    this.bottles.figure.hidden = this.pace.figure.hidden = true;
+  }
+
   /** {"type": "slots", tick, values: {"obj.comp.slot": v}} */
   slots(message) {
     const t = (message.tick ?? 0) / this.rate;
