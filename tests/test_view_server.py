@@ -296,7 +296,7 @@ def test_a_view_that_only_watches_says_why_and_sends_no_command(plant, tmp_path)
 
         hello, refused = talk(watching, conversation)
     assert hello == {"type": "hello", "run": RUN, "control": False, "viewer": "view-watch",
-                     "reason": "this view was started with --no-control"}
+                     "reason": "it was started with --no-control"}
     assert refused == {"type": "error", "op": "stop", "slot": "", "ref": "s",
                        "error": "this view only watches (it was started with --no-control): the command was not sent"}
     assert plant[3].proc.poll() is None

@@ -178,7 +178,7 @@ def _view(parser, args) -> int:
     relay = Relay(args.run, args.connect, mode=args.mode, tls=tls, name=args.name)   # a BusError: exit 1
     try:
         return asyncio.run(serve(relay, host=args.host, port=args.port, bundle=args.bundle or BUNDLE,
-                                 control=not args.no_control, reason="this view was started with --no-control",
+                                 control=not args.no_control, reason="it was started with --no-control",
                                  timeout=args.timeout, announce=announce, opened=opened))
     finally:
         relay.close()

@@ -10,6 +10,7 @@ import json
 import uuid
 
 from hub.bus import wire
+from hub.bus.tls import common_name
 from hub.bus.commands import command_message
 from hub.bus.session import Bus, Message
 from hub.bus.settings import BusSettings
@@ -36,6 +37,8 @@ class Relay:
         self.name = wire.check_run_name(name) if name else f"view-{uuid.uuid4().hex[:8]}"
         self.connect = tuple(connect)
         self.bus = Bus(BusSettings(mode=mode, connect=self.connect, tls=tls), listen=False)
+        # The name access control knows this view by: its certificate's common name (None: none shown).
+        self.common_name = common_name(tls.certificate) if tls is not None and tls.certificate else None
         self.speeds = f"plant/{self.run}/{SPEEDS}"
 
     @property

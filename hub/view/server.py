@@ -21,6 +21,7 @@ from hub.core.errors import PlanthubError
 from hub.view import frames
 from hub.view.bridge import Bridge
 from hub.view.browser import close_browsers
+from hub.view.scene import refusal
 from hub.view.relay import SPEEDS_PERIOD, Relay, ViewError, slot_sample
 
 _log = logging.getLogger("planthub.view")
@@ -45,6 +46,7 @@ class View:
         self.hello = frames.frame("hello", run=self.run, control=control, reason="" if control else reason,
                                   viewer=relay.name)
         self.control = control
+        self.why_not = "" if control else reason   # why the panel is off (a command is refused with it)
         self.scene: str | None = None          # the scene frame, once the hub answered
         self.state = self.figures = None      # the last frames of each, for a browser that comes late
         self.stopped: str | None = None       # why the run stopped, once its state said so
@@ -143,7 +145,19 @@ class View:
         except ViewError as exc:
             _log.warning("planthub view: %s", exc)
             return
-        self.scene = self._broadcast("scene", {"scene": scene})
+        self.take_scene(scene, broadcast=True)
+
+    def take_scene(self, scene: dict, broadcast: bool = False) -> None:
+        """The scene the hub answered; under its access control (the scene's `access`), a view whose
+        certificate may only watch greys its panel out and says why (hub/view/scene.py)."""
+        why = refusal(scene, self.relay.common_name)
+        if why and self.control:
+            self.control, self.why_not = False, why
+            self.hello = frames.frame("hello", run=self.run, control=False, reason=why, viewer=self.relay.name)
+        if broadcast:
+            self.scene = self._broadcast("scene", {"scene": scene})
+        else:
+            self.scene = frames.frame("scene", scene=scene)
 
     # --- from the browsers ---------------------------------------------------------------
     def attach(self, browser) -> None:
@@ -186,7 +200,7 @@ class View:
             browser.send(frames.frame("error", error=why, op=request.op, slot=request.slot, ref=request.ref))
 
         if not self.control:
-            return refuse("this view only watches (it was started with --no-control): the command was not sent")
+            return refuse(f"this view only watches ({self.why_not}): the command was not sent")
         if not self.hub_alive:
             return refuse(f"the hub of run {self.run!r} is not there ({self.relay.where}): the command was not sent")
         if self._in_flight >= MAX_IN_FLIGHT:
@@ -292,7 +306,7 @@ async def serve(relay: Relay, *, host: str, port: int, bundle, control: bool = T
                 fetching.cancel()
                 await asyncio.gather(fetching, return_exceptions=True)
                 return 128 + stop.result()
-            view.scene = frames.frame("scene", scene=fetching.result())
+            view.take_scene(fetching.result())
             return await serve_page(view, stop, host=host, port=port, bundle=bundle, announce=announce,
                                     opened=opened)
         finally:
