@@ -13,7 +13,7 @@ VIEW_SOURCES := hub/view/web/package-lock.json hub/view/web/package.json hub/vie
                 hub/view/web/index.html $(shell find hub/view/web/src -type f 2>/dev/null)
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: run test bench fmus venv view view-assets chromium clean clean-venv
+.PHONY: run test bench screenshot fmus venv view view-assets chromium clean clean-venv
 
 run: $(STAMP) fmus view-assets
 	$(PY) -m hub run $(SCENARIO)
@@ -43,9 +43,15 @@ chromium: $(CHROMIUM)
 $(CHROMIUM):
 	apt-get update && apt-get install -y --no-install-recommends chromium
 
-bench: $(STAMP) fmus
+bench: $(STAMP) fmus view-assets chromium
 	$(PY) -m tests.bench
 	$(PY) -m tests.fmus.bench_petri
+	$(PY) -m tests.bench_view
+
+# The README's picture of the view (hub/view/bottling_plant.png): the bottling plant at real time on
+# loopback with `planthub view`, shot in headless chromium once about 40 bottles are on the line.
+screenshot: $(STAMP) fmus view-assets chromium
+	$(PY) -m tests.screenshot_view hub/view/bottling_plant.png
 
 fmus: $(STAMP)
 	@if [ -f fmus/Makefile ]; then $(MAKE) --no-print-directory -C fmus PYTHON=$(abspath $(PY)) BUILD=$(abspath build/fmus); fi
