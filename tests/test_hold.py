@@ -58,10 +58,11 @@ def test_pause_steps_and_resume_give_the_recording_of_a_run_nobody_held(bus, tmp
         operator.wait_state("running")
         thread.join(60)
         assert not thread.is_alive()
-    assert same_files(tmp_path / "plain", tmp_path / "held", names=("recording.csv",))
-    with open(tmp_path / "held" / "events.csv", newline="") as f:
-        control = [(r["tick"], r["detail"]) for r in csv.DictReader(f) if r["slot"] == "@run"]
-    assert [d for _, d in control] == ["pause by trainer", "step 3", "resume"]
+    assert same_files(tmp_path / "plain", tmp_path / "held"), "recording.csv and events.csv: what the plant did"
+    with open(tmp_path / "held" / "bus_log.csv", newline="") as f:
+        control = [(r["tick"], r["detail"]) for r in csv.DictReader(f)]
+    assert [d for _, d in control] == ["pause by trainer (the run's control)", "step 3 (the run's control)",
+                                       "resume (the run's control)"]
     assert [int(t) for t, _ in control][1:] == [held, held + 3 * substeps], "taken at the point the run was held at"
     with open(tmp_path / "held" / "commands.csv", newline="") as f:
         recorded = [(r["op"], r["value"], r["by"]) for r in csv.DictReader(f)]
@@ -83,10 +84,18 @@ def test_step_needs_a_pause_and_stop_ends_a_held_run(bus, tmp_path):
         assert not bad["ok"] and "step takes a number of points from 1 to 100000, got 0" in bad["error"]
         assert operator.command("pause")["ok"]
         assert wait_until(lambda: run.master.hold.paused, 5)
+        held = run.tick
         assert operator.command("stop")["ok"]
         thread.join(10)
         assert not thread.is_alive(), "a stop ends a held run"
         assert run.stopped_by.startswith("stopped by an operator")
+        assert run.tick == held + run.scenario.run.substeps, "at the next point, where it is recorded"
+    with open(tmp_path / "run" / "commands.csv", newline="") as f:
+        assert [(r["op"], int(r["tick"])) for r in csv.DictReader(f)] == [("pause", held), ("stop", run.tick)]
+    # Its replay ends where it ended, with the same files.
+    with hub(SCENARIO, tmp_path / "replayed", replay=tmp_path / "run") as replayed:
+        replayed.run()
+    assert same_files(tmp_path / "run", tmp_path / "replayed")
 
 
 def test_pace_changes_a_paced_run(bus, tmp_path):

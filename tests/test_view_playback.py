@@ -317,7 +317,9 @@ def test_a_broken_event_log_recording_or_summary_is_named_with_its_line(recorded
     assert broken(recorded, tmp_path / "e", "recording.csv", '"t","x.y.z"\n0.0,1\n') == (
         "RUN/recording.csv is not a recording planthub wrote: its first column is 't', not 'time'")
     assert broken(recorded, tmp_path / "f", "recording.csv", '"time","x.y.z"\n0.0,1\nlater,2\n0.2,3\n') == (
-        "RUN/recording.csv:3: the time 'later' is not a number")
+        "RUN/recording.csv:3: the time 'later' is not a finite number")
+    assert broken(recorded, tmp_path / "f2", "recording.csv", '"time","x.y.z"\n0.0,1\ninf,2\n') == (
+        "RUN/recording.csv:3: the time 'inf' is not a finite number")
     assert broken(recorded, tmp_path / "g", "summary.json", "[1") == (
         "RUN/summary.json is not JSON: Expecting ',' delimiter: line 1 column 3 (char 2)")
     assert broken(recorded, tmp_path / "h", "summary.json", "[1]") == (

@@ -328,3 +328,19 @@ def test_pause_and_resume_from_the_browser_and_the_runs_state_comes_back(plant):
     paused, resumed, states = talk(url, conversation)
     assert paused["ok"] and resumed["ok"] and resumed["tick"] >= paused["tick"]
     assert states.index("running", states.index("paused")) > states.index("paused")
+
+
+def test_a_malformed_host_or_origin_is_refused_not_a_server_error(plant):
+    """urlsplit raises on "[::1": the request is refused (403), not answered with a 500 and a traceback."""
+    import aiohttp
+
+    _, _, url, _ = plant
+
+    async def main():
+        async with aiohttp.ClientSession() as session:
+            async with session.get(f"{url}ws", headers={"Origin": "http://[::1", "Upgrade": "websocket",
+                                                         "Connection": "Upgrade", "Sec-WebSocket-Version": "13",
+                                                         "Sec-WebSocket-Key": "dGhlIHNhbXBsZSBub25jZQ=="}) as r:
+                return r.status, await r.text()
+    status, text = asyncio.run(main())
+    assert status == 403 and "malformed Host" in text, (status, text)

@@ -87,7 +87,7 @@ class Commands:
         self._released: dict[int, object] = {}
         self._once: list[tuple[int, object]] = []
         self._waiting: list = []   # commands taken in while paused, applied at the next point
-        self._held_rows: list = []   # event-log rows of the control applied while paused (for the next point)
+        self.stop_pending = False    # a stop came while the run was held: it ends the run at the next point
         self.control = None        # the run's control (hub/run/hold.py Hold): pause, resume, step, pace
         self.stop_requested = False
 
@@ -170,15 +170,18 @@ class Commands:
             due, self._waiting = self._waiting, []
             if not self._inbox.empty():
                 due += self._live(tick)
-        rows, self._held_rows = self._held_rows, []
+        rows = []
         for command in due:
             kind = self.slots[command.slot][1].type if command.slot else None
             if command.op == "stop":
                 self.stop_requested = True
             elif command.op in CONTROL:
-                # When points are computed is no part of the results: a replay records, and runs through.
+                # When points are computed is no part of the results: recorded for a replay, which
+                # runs through, and noted in bus_log.csv — events.csv holds only what the plant did.
                 if self._replay is None and self.control is not None:
                     self.control.apply(command)
+                self._note_control(tick, command)
+                continue
             else:
                 index = self.slots[command.slot][0]
                 if command.op == "set":
@@ -214,26 +217,31 @@ class Commands:
 
     def wait(self, tick: int, timeout: float) -> None:
         """While the run is held at `tick`: wait up to `timeout` s for live commands. The run's
-        control among them is applied and recorded now (its event-log rows go out with the next
-        point), a stop ends the hold, the others wait for the next point."""
+        control among them is applied and recorded now; the others wait for the next point, and a
+        stop ends the hold so that the run ends there (recorded at that point as any stop, so a
+        replay ends at the same tick)."""
         item = self._inbox.get(timeout)
         if item is None:
             return
         for command in self._live(tick, [item]):
             if command.op in CONTROL:
                 self.control.apply(command)
-                self.recorder.command(tick, command.op, "", command.value_text(None), command.by)
-                self._held_rows.append((tick, "@run", command.describe(None)))
+                self._note_control(tick, command)
             else:
                 self._waiting.append(command)
-                if command.op == "stop":
-                    self.stop_requested = True   # a stop ends a held run at once
+                self.stop_pending |= command.op == "stop"
+
+    def _note_control(self, tick: int, command: Command) -> None:
+        self.recorder.command(tick, command.op, "", command.value_text(None), command.by)
+        self.recorder.notice(tick, f"{command.describe(None)} (the run's control)")
 
     def _answer(self, payload: bytes, tick: int, error: str | None) -> None:
         if self._results is None:
             return
         try:
             ident = wire.unpack(payload).get("id", "")
+            if not isinstance(ident, str) or len(ident) > MAX_NAME:
+                ident = ""   # echoed to everyone: only an id of the form wire.md gives
         except (wire.WireError, AttributeError):
             ident = ""
         self._results.put(wire.pack({"id": ident, "ok": error is None, "tick": tick, "error": error or ""}))

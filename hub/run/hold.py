@@ -10,7 +10,7 @@ class Hold:
     A pause holds the run after a point, before the physics goes on: the master asks `holding`
     after every point and then `wait`s here, where commands are taken at once, the views and the
     participants' lockstep kept alive (`idle`), and a stop condition (an operator's `stop`, a
-    signal) ends the hold. `step N` lets N more points run, then holds again. `pace F` sets a
+    signal) ends the hold (an operator's stop at the next point, where it is recorded). `step N` lets N more points run, then holds again. `pace F` sets a
     paced run's factor of real time. None of it changes what the points compute.
     """
 
@@ -55,7 +55,7 @@ class Hold:
         """Hold the run at `tick` until it is resumed or stepped, or `stopped()` gives a stop."""
         rate = self.commands.rate
         self.state("paused", f"paused by an operator at t = {tick / rate:.9g} s")
-        while self.paused and not self.steps and stopped() is None:
+        while self.paused and not self.steps and stopped() is None and not self.commands.stop_pending:
             self.commands.wait(tick, POLL)
             self.idle()
         if stopped() is None:

@@ -87,7 +87,7 @@ class Broadcast:
         if now >= self._next_poll:
             watched = self._watched
             self._poll(now)
-            if self._watched and (not watched or self._due <= tick):
+            if self._watched and (not watched or self._due <= tick):   # a newcomer: _due was reset
                 self._bodies.put(wire.pack(self.message(tick)))
                 self.sent += 1
                 self._due = tick + self.period
@@ -133,6 +133,8 @@ class Broadcast:
             if kind == "viewer":
                 if not message.alive:
                     changed |= self.requests.pop(viewer, None) is not None
+                else:
+                    self._due = 0   # a newcomer gets the bodies at once (also while the run is held)
                 continue
             try:
                 request = wire.unpack(message.payload)

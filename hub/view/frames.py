@@ -1,9 +1,21 @@
-"""The WebSocket protocol between the view and a browser: what a browser may send, checked, and the JSON text frames the view sends (/root/logs/view_spec.md).
+"""The WebSocket protocol between the view and a browser (`/ws`): what a browser may send, checked,
+and the JSON text frames the view sends.
+
+view → browser, text frames, JSON objects with `type`: `hello` first (`run`, `viewer`, `control`
+and the `reason` when it is false; `mode: "playback"` and the recording's span for a run folder),
+`scene` (the scene document, schemas/scene.schema.json), `state`, `figures`, `events` (`rows`),
+`result` (a command's answer, with the `op`, `slot` and `ref` it was sent with), `slots` (live
+values of the belts' velocities), `hub` (`alive`), `error`, and for playback `playback` and
+`recording`. Binary frames: the bodies message exactly as it came from the bus
+(schemas/scene.schema.json `bodies_message`). browser → view: `{"type": "command", "op", "slot",
+"value", "ref"}`, `{"type": "rate", "period"}`, and for playback `{"type": "playback", "op":
+play|pause|speed|seek, "value"}`.
 
 A browser's frame that is not one of these gets an error frame back naming what is wrong; the
-view goes on. Commands and rate requests go to a live run; playback requests (play, pause, speed,
-seek) to a recorded one's playback (hub/view/playback.py). The hub checks a command's slot and value again (hub/bus/commands.py), with its
-did-you-mean: here only the shape is checked, so that nothing malformed goes on the bus.
+view goes on. Commands and rate requests go to a live run; playback requests to a recorded one's
+playback (hub/view/playback.py). The hub checks a command's slot and value again
+(hub/bus/commands.py), with its did-you-mean: here only the shape is checked, so that nothing
+malformed goes on the bus.
 """
 from __future__ import annotations
 

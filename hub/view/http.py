@@ -165,9 +165,14 @@ def is_loopback(host: str) -> bool:
 def _refused(request: web.Request, loopback: bool) -> str | None:
     """Why this WebSocket request is refused (another site's page), or None."""
     host = request.headers.get("Host", "")
-    if loopback and not is_loopback(urlsplit(f"//{host}").hostname or ""):
-        return f"this view answers requests for 127.0.0.1 or localhost, not for {host[:80]!r}"
     origin = request.headers.get("Origin")
-    if origin is not None and urlsplit(origin).netloc.lower() != host.lower():
+    try:
+        named = urlsplit(f"//{host}").hostname or ""
+        came_from = urlsplit(origin).netloc.lower() if origin is not None else None
+    except ValueError:   # a malformed Host or Origin ("[::1"): no page of this view sends one
+        return f"malformed Host {host[:80]!r} or Origin {(origin or '')[:80]!r}"
+    if loopback and not is_loopback(named):
+        return f"this view answers requests for 127.0.0.1 or localhost, not for {host[:80]!r}"
+    if came_from is not None and came_from != host.lower():
         return f"a page of {origin[:80]!r} may not use this view's WebSocket (its origin is http://{host[:80]})"
     return None

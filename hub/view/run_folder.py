@@ -134,8 +134,8 @@ class Recording:
         for line, row in rows:
             try:
                 ticks.append(round(float(row[0]) * rate))
-            except ValueError:
-                raise PlanthubError(f"{path}:{line}: the time {row[0]!r} is not a number") from None
+            except (ValueError, OverflowError):   # not a number, or not a finite one
+                raise PlanthubError(f"{path}:{line}: the time {row[0]!r} is not a finite number") from None
         columns = {name: [row[i] for _, row in rows] for i, name in enumerate(header) if i}
         return cls(np.asarray(ticks, np.int64), columns)
 

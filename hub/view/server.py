@@ -98,7 +98,8 @@ class View:
 
     def _on_result(self, payload: bytes) -> None:
         result = self._map(payload, "command result")
-        sent = self._pending.pop(result.get("id"), None)
+        ident = result.get("id")
+        sent = self._pending.pop(ident, None) if isinstance(ident, str) else None
         extra = {"op": sent[1], "slot": sent[2], "ref": sent[3]} if sent else {}
         self._broadcast("result", {**result, **extra})
 

@@ -6,7 +6,7 @@ import * as THREE from 'three';
 import URDFLoader from 'urdf-loader';
 import { OBJLoader } from 'three/examples/jsm/loaders/OBJLoader.js';
 
-const JOINTS_PER_ARM = 7;   // the bodies message's stride (view spec §2)
+const JOINTS_PER_ARM = 7;   // the bodies message's stride (schemas/scene.schema.json `bodies_message`)
 const TOOL_RADIUS = 0.012;
 
 /**

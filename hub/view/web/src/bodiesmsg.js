@@ -1,4 +1,4 @@
-// The bodies message (view spec §2): a msgpack map whose arrays arrive as byte strings. Decoded
+// The bodies message (schemas/scene.schema.json `bodies_message`): a msgpack map whose arrays arrive as byte strings. Decoded
 // here once into typed arrays, so the rest of the view never sees bytes.
 
 import { decode } from '@msgpack/msgpack';

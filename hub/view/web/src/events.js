@@ -1,4 +1,4 @@
-// The event log: [tick, slot, detail] rows as the hub sends them (view spec §3), newest on top,
+// The event log: [tick, slot, detail] rows as the hub sends them (schemas/scene.schema.json `events_message`), newest on top,
 // filtered by object name (the slot's first part). Every row is kept for the test hook and
 // for changing the filter later; only the newest matching rows are in the table, since a
 // busy plant makes thousands and the DOM is the slow part.

@@ -1,4 +1,4 @@
-// The live plant summary from the figures message (view spec §4): the headline figures an
+// The live plant summary from the figures message (schemas/scene.schema.json `figures_message`): the headline figures an
 // operator watches — in, delivered per lane, misroutes, rejects, jams, on the line, pace — and
 // then every other key PlantSummary.as_dict gives (and any other section), rendered generically,
 // so a figure added on the hub side shows up without a change here.

@@ -1,4 +1,4 @@
-// The page's test hooks (view spec, addendum): `window.planthub`, read by the browser test to
+// The page's test hooks (hub/view/frames.py): `window.planthub`, read by the browser test to
 // see what the page saw and drew without scraping pixels. The contract keys are connected,
 // frames, tick, bodies(), events and figures; hello, state, scene and results are extras, and
 // playback, for a recorded run.

@@ -19,7 +19,7 @@ import { Picker } from './tooltip.js';
 import { installHooks } from './hooks.js';
 
 const FOLLOW_LIST_MS = 1000;   // how often the follow list is refreshed from the bodies in play
-const DEFAULT_PERIOD = '0.05'; // the hub's bodies period unless asked otherwise (view spec §2)
+const DEFAULT_PERIOD = '0.05'; // the hub's bodies period unless asked otherwise (schemas/scene.schema.json `bodies_message`)
 
 class App {
   constructor() {

@@ -1,4 +1,4 @@
-// The operator panel, generic over the scene's object slots (view spec, addendum): which
+// The operator panel, generic over the scene's object slots (hub/view/frames.py): which
 // buttons an object gets follows from its slots' names, types and directions, not from its
 // module, so a new module with a `<comp>.run` or `<comp>.closed` slot gets its controls for free.
 // Every button says what it sends in data-op / data-slot / data-value (JSON), which is also

@@ -1,6 +1,6 @@
 // The playback bar of a recorded run (`planthub view RUN_DIR`, hello's "mode": "playback"): play,
 // pause, speed and a time slider over the recording's span. It only asks; the server's clock
-// decides, and its "playback" frames say what it did (view spec: playback frames).
+// decides, and its "playback" frames say what it did (hub/view/frames.py).
 
 const SEEK_MS = 100;   // while the slider is dragged, at most one seek per this many ms (the last one always goes)
 

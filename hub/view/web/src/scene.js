@@ -1,4 +1,4 @@
-// The plant's geometry from the scene document (view spec §1): one three.js group in plant
+// The plant's geometry from the scene document (schemas/scene.schema.json `scene`): one three.js group in plant
 // coordinates (z up), with handles on what the bodies message changes — part solidity, moving
 // part offsets, trigger occupancy, belt surfaces — so a sample is applied without searching.
 
