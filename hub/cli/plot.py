@@ -5,12 +5,12 @@ import argparse
 import csv
 import logging
 import math
-from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from fnmatch import fnmatchcase
 from pathlib import Path
 
 from hub.cli.exits import OK, UsageError
+from hub.core.csvfiles import body_rows, reading
 from hub.core.errors import PlanthubError
 from hub.core.registry import did_you_mean
 
@@ -132,7 +132,7 @@ def _recording_of(run: Path) -> Path:
 
 
 def _header(recording: Path) -> list[str]:
-    with _reading(recording) as handle:
+    with reading(recording) as handle:
         header = next(csv.reader(handle), None)
     if not header:
         raise PlanthubError(f"{recording} is empty: not even its header (the run wrote nothing)")
@@ -210,18 +210,13 @@ def _read(recording: Path, header: list[str], wanted: list[str], start, end):
     index = {name: i for i, name in enumerate(header)}
     times, texts = [], {c: [] for c in wanted}
     first = last = None
-    with _reading(recording) as handle:
+    def cut(text):   # a run killed while the recorder wrote its last line
+        _log.warning(f"planthub plot: warning: {text}; drawn without it")
+
+    with reading(recording) as handle:
         rows = csv.reader(handle)
         next(rows)
-        row, line = next(rows, None), 2
-        while row is not None:
-            following = next(rows, None)   # a short row is forgiven only as the last one
-            if len(row) != len(header):
-                if following is None:   # a run killed while the recorder wrote its last line
-                    _log.warning(f"planthub plot: warning: {recording}:{line}: the last line is cut short "
-                                 f"({len(row)} of {len(header)} columns); drawn without it")
-                    break
-                raise PlanthubError(f"{recording}:{line}: {len(row)} columns, but its header names {len(header)}")
+        for line, row in body_rows(rows, recording, len(header), cut):
             try:
                 t = float(row[0])
             except ValueError:
@@ -232,7 +227,6 @@ def _read(recording: Path, header: list[str], wanted: list[str], start, end):
                 times.append(t)
                 for column in wanted:
                     texts[column].append(row[index[column]])
-            row, line = following, line + 1
     if first is None:
         raise PlanthubError(f"{recording} is empty: its header, but no recorded point (the run ended before "
                             "its first communication point)")
@@ -266,7 +260,7 @@ def _marks(run: Path, patterns: list[str], first: float, last: float):
     log = run / "events.csv"
     if not log.is_file():
         raise UsageError(f"{log}: no such file, so --events has no events to mark")
-    with _reading(log) as handle:
+    with reading(log) as handle:
         reader = csv.DictReader(handle)
         if reader.fieldnames is None:
             raise PlanthubError(f"{log} is empty: not even its header")
@@ -292,17 +286,6 @@ def _marks(run: Path, patterns: list[str], first: float, last: float):
         marks.append(Marks(shown, label=f"{pattern} ({len(shown)})", color=_MARK_COLOURS[i % len(_MARK_COLOURS)]))
     return marks
 
-
-@contextmanager
-def _reading(path: Path):
-    """The file open for csv; what makes it unreadable said with its name, not as a traceback."""
-    try:
-        with open(path, newline="", encoding="utf-8") as handle:
-            yield handle
-    except (UnicodeDecodeError, csv.Error) as exc:
-        raise PlanthubError(f"{path} is not a CSV file planthub wrote: {exc}") from None
-    except OSError as exc:
-        raise PlanthubError(f"cannot read {path}: {exc.strerror or exc}") from None
 
 
 def _unlabelled(marks):

@@ -6,7 +6,6 @@ only hands the raw payload to a `Bridge` (hub/view/bridge.py); decoding happens 
 """
 from __future__ import annotations
 
-import json
 import uuid
 
 from hub.bus import wire
@@ -16,11 +15,11 @@ from hub.bus.session import Bus, Message
 from hub.bus.settings import BusSettings
 from hub.core.errors import PlanthubError
 from hub.core.slots import SlotType
+from hub.view.scene import read_scene
 
 #: the belts' speeds, watched for the panel's plots, and how often (s of plant time)
 SPEEDS = "*/drive/velocity"   # what each belt drives its bottles to now (drive.speed is only its target)
 SPEEDS_PERIOD = 0.2
-SCENE_FORMAT, SCENE_VERSION = "planthub-scene", 1
 
 _TYPES = {f"planthub/{t.value}": t for t in SlotType}
 
@@ -81,16 +80,10 @@ class Relay:
         return wire.control_key(self.run, *parts)
 
     def _scene(self, payload: bytes) -> dict:
-        what = f"the scene the hub of run {self.run!r} answered ({self.where})"
         try:
-            scene = json.loads(payload.decode("utf-8"))
-        except (UnicodeDecodeError, ValueError) as exc:
-            raise ViewError(f"{what} is not JSON: {exc}") from None
-        if not isinstance(scene, dict) or scene.get("format") != SCENE_FORMAT:
-            raise ViewError(f"{what} is not a {SCENE_FORMAT} document")
-        if scene.get("version") != SCENE_VERSION:
-            raise ViewError(f"{what} is version {scene.get('version')!r}; this view reads version {SCENE_VERSION}")
-        return scene
+            return read_scene(payload, f"the scene the hub of run {self.run!r} answered ({self.where})")
+        except PlanthubError as exc:
+            raise ViewError(str(exc)) from None
 
 
 def slot_sample(message: Message) -> tuple[str, object, int]:

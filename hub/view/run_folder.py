@@ -10,15 +10,15 @@ from __future__ import annotations
 import csv
 import json
 import math
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 import pyarrow.compute as pc
 
+from hub.core.csvfiles import body_rows, reading
 from hub.core.errors import PlanthubError
 from hub.view.bodies_file import NAME, SCENE, BodyRecording
-from hub.view.scene import FORMAT, VERSION
+from hub.view.scene import read_scene
 
 EVENTS, RECORDING, SUMMARY = "events.csv", "recording.csv", "summary.json"
 EVENT_COLUMNS = ["time", "tick", "slot", "detail"]
@@ -164,17 +164,10 @@ def _scene(path: Path) -> dict:
         raise PlanthubError(f"{path}: no such file: the scene of the body recording beside it (`planthub run "
                             "--record-bodies` writes both)")
     try:
-        scene = json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, ValueError) as exc:
-        raise PlanthubError(f"{path} is not JSON: {exc}") from None
-    if not isinstance(scene, dict) or scene.get("format") != FORMAT:
-        raise PlanthubError(f"{path} is not a {FORMAT} document (the scene `planthub run --record-bodies` writes)")
-    if scene.get("version") != VERSION:
-        raise PlanthubError(f"{path} is version {scene.get('version')!r}; this view reads version {VERSION}")
-    rate = scene.get("physics_rate")
-    if not isinstance(rate, int) or isinstance(rate, bool) or rate <= 0:
-        raise PlanthubError(f"{path}: physics_rate is {rate!r}, not a positive whole number of ticks per s")
-    return scene
+        data = path.read_bytes()
+    except OSError as exc:
+        raise PlanthubError(f"cannot read {path}: {exc.strerror or exc}") from None
+    return read_scene(data, str(path), " (the scene `planthub run --record-bodies` writes)")
 
 
 def _summary(path: Path, notes: list[str]) -> dict | None:
@@ -193,7 +186,7 @@ def _summary(path: Path, notes: list[str]) -> dict | None:
 def _rows(path: Path, header: list[str] | None, notes: list[str], what: str):
     """(line, row) of a CSV file planthub wrote, its header first (line 1); a last line cut short (a
     run killed while writing it) is left out with a note. `header`: what the header must be."""
-    with _reading(path) as handle:
+    with reading(path) as handle:
         reader = csv.reader(handle)
         first = next(reader, None)
         if not first:
@@ -204,26 +197,4 @@ def _rows(path: Path, header: list[str] | None, notes: list[str], what: str):
         if header is None and first[0] != "time":
             raise PlanthubError(f"{path} is not {what} planthub wrote: its first column is {first[0]!r}, not 'time'")
         yield 1, first
-        width = len(first)
-        row, line = next(reader, None), 2
-        while row is not None:
-            following = next(reader, None)
-            if len(row) != width:
-                if following is None:
-                    notes.append(f"{path}:{line}: the last line is cut short ({len(row)} of {width} columns); "
-                                 "played without it")
-                    return
-                raise PlanthubError(f"{path}:{line}: {len(row)} columns, but its header names {width}")
-            yield line, row
-            row, line = following, line + 1
-
-
-@contextmanager
-def _reading(path: Path):
-    try:
-        with open(path, newline="", encoding="utf-8") as handle:
-            yield handle
-    except (UnicodeDecodeError, csv.Error) as exc:
-        raise PlanthubError(f"{path} is not a CSV file planthub wrote: {exc}") from None
-    except OSError as exc:
-        raise PlanthubError(f"cannot read {path}: {exc.strerror or exc}") from None
+        yield from body_rows(reader, path, len(first), lambda text: notes.append(f"{text}; played without it"))

@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 
 from hub.bus.tls import common_name
+from hub.core.errors import PlanthubError
 
 FORMAT = "planthub-scene"
 VERSION = 1
@@ -65,3 +66,21 @@ def refusal(scene: dict, name: str | None) -> str | None:
 def scene_bytes(plant, run: str) -> bytes:
     """The document as it goes on the bus: compact UTF-8 JSON."""
     return json.dumps(scene_document(plant, run), separators=(",", ":"), allow_nan=False).encode("utf-8")
+
+
+def read_scene(data: bytes, what: str, hint: str = "") -> dict:
+    """A scene document read back (from the hub's answer, or a run folder's scene.json): the
+    version this code draws, with a whole positive physics rate; else a PlanthubError naming `what`
+    (`hint`: where such a document comes from)."""
+    try:
+        scene = json.loads(data.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise PlanthubError(f"{what} is not JSON: {exc}") from None
+    if not isinstance(scene, dict) or scene.get("format") != FORMAT:
+        raise PlanthubError(f"{what} is not a {FORMAT} document{hint}")
+    if scene.get("version") != VERSION:
+        raise PlanthubError(f"{what} is version {scene.get('version')!r}; this view reads version {VERSION}")
+    rate = scene.get("physics_rate")
+    if not isinstance(rate, int) or isinstance(rate, bool) or rate <= 0:
+        raise PlanthubError(f"{what}: physics_rate is {rate!r}, not a positive whole number of ticks per s")
+    return scene
