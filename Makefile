@@ -13,7 +13,7 @@ VIEW_SOURCES := hub/view/web/package-lock.json hub/view/web/package.json hub/vie
                 hub/view/web/index.html $(shell find hub/view/web/src -type f 2>/dev/null)
 CHROMIUM := /usr/bin/chromium
 
-.PHONY: run test bench screenshot fmus venv view view-assets chromium clean clean-venv
+.PHONY: run test bench stability screenshot fmus venv view view-assets chromium clean clean-venv
 
 run: $(STAMP) fmus view-assets
 	$(PY) -m hub run $(SCENARIO)
@@ -47,6 +47,11 @@ bench: $(STAMP) fmus view-assets chromium
 	$(PY) -m tests.bench
 	$(PY) -m tests.fmus.bench_petri
 	$(PY) -m tests.bench_view
+
+# The long hard cases (tests/hard/): 10 simulated minutes of a jam, an hour of the paper's loop and of
+# the bottling plant, each against its stated bounds; results to build/bench/stability.json for the report.
+stability: $(STAMP) fmus
+	$(PY) -m tests.hard.stability
 
 # The README's picture of the view (hub/view/bottling_plant.png): the bottling plant at real time on
 # loopback with `planthub view`, shot in headless chromium once about 40 bottles are on the line.

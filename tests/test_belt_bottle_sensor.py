@@ -11,6 +11,7 @@ import sys
 
 import pytest
 
+from hub.core.errors import SimulationError
 from hub.scenario.checker import load_scenario
 
 from .helpers import ROOT, run_scenario
@@ -51,6 +52,26 @@ def test_enter_time_matches_the_analytical_value_within_one_percent(tmp_path, ov
     expected = analytical_enter_time(scenario)
     measured = enter_time(tmp_path)
     assert measured == pytest.approx(expected, rel=0.01)
+
+
+def test_the_papers_explicit_law_errs_by_its_first_order_and_diverges_past_k_dt_2(tmp_path):
+    """`run.integrator: explicit` (for comparison only): at 150 Hz, k·dt = 0.107, the bottle runs a
+    little ahead of the exact curve (its velocity error shrinks by 1 − k·dt, not e^(−k·dt), a
+    tick), so it breaks the beam a tick or two early; at k·dt = 2.5 the field throws it back and
+    forth ever harder until the physics watch stops the run. The exact update (the default) holds
+    at both (test above)."""
+    scenario, _, _ = run_scenario(SCENARIO, tmp_path / "explicit", {"run.integrator": "explicit"})
+    expected, exact = analytical_enter_time(scenario), 1 / 150
+    assert -3 * exact <= enter_time(tmp_path / "explicit") - expected < 0
+    with pytest.raises(SimulationError, match=r"bottle .bottle., tick \d+ .*: it moves at [\d.]+ m/s, above"):
+        run_scenario(SCENARIO, tmp_path / "diverges",
+                     {"run.integrator": "explicit", "run.physics_rate": 60, "objects.belt.k": 150.0})
+
+
+def test_solver_iterations_reach_the_engine(tmp_path):
+    from hub.run.plant import Plant
+    with Plant(load_scenario(SCENARIO, {"run.solver_iterations": 7})) as plant:
+        assert plant.world.engine.solver_iterations == 7
 
 
 def test_bottle_stays_upright_and_on_the_belt(tmp_path):

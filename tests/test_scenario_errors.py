@@ -201,6 +201,18 @@ def test_sleep_after_must_be_a_time_not_below_zero(write_scenario):
     assert found == [f"{path}:2: run.sleep_after: 'soon' is not of type 'number'"]
 
 
+def test_solver_iterations_and_integrator_are_checked(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        run: {solver_iterations: 0, integrator: implicit}
+        objects:
+          bottle: {module: bottle, position: [0, 0, 0]}
+        """)
+    found, _ = problems(path)
+    assert found == [f"{path}:2: run.integrator: 'implicit' is not one of ['exact', 'explicit']",
+                     f"{path}:2: run.solver_iterations: 0 is less than the minimum of 1"]
+
+
 def test_ambiguous_short_slot_name(write_scenario):
     path = write_scenario("""
         planthub: 1

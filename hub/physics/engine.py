@@ -20,6 +20,7 @@ class Engine:
 
     def __init__(self, dt: float, gravity: float, solver_iterations: int):
         self.client = pybullet.connect(pybullet.DIRECT)
+        self.solver_iterations = solver_iterations
         self.call(pybullet.setGravity, 0.0, 0.0, gravity)
         self.call(
             pybullet.setPhysicsEngineParameter,

@@ -87,14 +87,14 @@ class PhysicsWorld:
     SOLVER_ITERATIONS = 20
 
     def __init__(self, rate: int, gravity: float = -9.81, solver_iterations: int | None = None,
-                 sleep_after: float = 0.05):
+                 sleep_after: float = 0.05, integrator: str = "exact"):
         self.rate = rate
         self.dt = 1.0 / rate
         self.tick = 0
         self.gravity = abs(gravity)
         self.engine = Engine(self.dt, gravity, solver_iterations or self.SOLVER_ITERATIONS)
         self._client = self.engine.client
-        self.fields = ForceFields(self.dt)
+        self.fields = ForceFields(self.dt, integrator)
         self.triggers = VolumeTriggers()
         self.seed = 0                           # the scenario's run.seed, for modules that draw at build time
         self.anchors: dict[str, Pose] = {}      # named belt ends, where a belt given `after:` starts

@@ -17,7 +17,9 @@ class Plant:
 
     def __init__(self, scenario: Scenario, every_source: bool = False):
         self.scenario = scenario
-        self.world = PhysicsWorld(scenario.run.physics_rate, sleep_after=scenario.run.sleep_after)
+        self.world = PhysicsWorld(scenario.run.physics_rate, sleep_after=scenario.run.sleep_after,
+                                  solver_iterations=scenario.run.solver_iterations,
+                                  integrator=scenario.run.integrator)
         self.world.seed = scenario.run.seed   # for modules that draw at build time (a source's destinations)
         self.world.watch.configure(scenario.run.max_speed, scenario.run.on_violation)
         try:

@@ -242,7 +242,9 @@ class _Checker:
             max_speed=float(watch["max_speed"]) if type(watch.get("max_speed")) in (int, float)
             and watch["max_speed"] > 0 else None,
             on_violation=watch.get("on_violation") if watch.get("on_violation") in ("stop", "remove") else "stop",
-            record_bodies=self.body_period(run.get("record_bodies"), rate, substeps))
+            record_bodies=self.body_period(run.get("record_bodies"), rate, substeps),
+            solver_iterations=setting("solver_iterations", None, int),
+            integrator=run.get("integrator") if run.get("integrator") in ("exact", "explicit") else "exact")
 
     @staticmethod
     def body_period(value, rate: int, substeps: int) -> int:

@@ -26,6 +26,8 @@ class RunSettings:
     max_speed: float | None = None   # run.watch.max_speed, m/s; None: from the fastest belt (hub/physics/watch.py)
     on_violation: str = "stop"       # run.watch.on_violation: "stop" the run, or "remove" the body and log it
     record_bodies: int = 0           # ticks between two points of the body recording (hub/view/bodies_file.py); 0: none
+    solver_iterations: int | None = None   # the engine's constraint solver iterations; None: PhysicsWorld.SOLVER_ITERATIONS
+    integrator: str = "exact"        # belt fields: "exact" update, or the paper's "explicit" law (hub/physics/fields.py)
 
     @property
     def dt(self) -> float:

@@ -8,9 +8,9 @@ from hub.physics.fields import ForceFields
 from hub.physics.frames import Pose, Straight
 
 
-def drive(k, dt, steps, speed=0.5, mass=0.05, v0=0.0):
+def drive(k, dt, steps, speed=0.5, mass=0.05, v0=0.0, integrator="exact"):
     """Integrate one free body under the field alone, as the physics engine would (v += F/m·dt)."""
-    fields = ForceFields(dt)
+    fields = ForceFields(dt, integrator)
     fields.add((0, 0, 0), (10, 10, 10), 0.0, k, speed)
     v = np.array([[v0, 0.0, 0.0]])
     history = []
@@ -34,6 +34,27 @@ def test_stable_and_without_overshoot_where_explicit_euler_diverges():
     v = drive(k, dt, 200, v0=-3.0)
     assert np.all(np.diff(v) >= 0) and np.all(v <= 0.5)
     assert v[-1] == pytest.approx(0.5, abs=1e-12)
+
+
+def test_the_explicit_law_is_the_papers_euler_step_and_diverges_past_k_dt_2():
+    """`integrator: explicit` (for comparison only): each tick v += k·dt·(v_tar − v), so the error
+    shrinks by 1 − k·dt: first-order close to the exact curve for small k·dt, overshooting between
+    1 and 2, growing beyond."""
+    dt = 1 / 150
+    v = drive(16.0, dt, 300, integrator="explicit")
+    n = np.arange(1, 301)
+    np.testing.assert_allclose(v, 0.5 * (1 - (1 - 16.0 * dt) ** n), rtol=1e-12)
+    exact = 0.5 * (1 - np.exp(-16.0 * dt * n))
+    assert 0 < np.max(v - exact) < 0.5 * 16.0 * dt * 0.5   # ahead of the exact curve, by O(k·dt)
+    overshoot = drive(225.0, dt, 20, integrator="explicit")   # k·dt = 1.5
+    assert overshoot[0] > 0.5 and abs(overshoot[-1] - 0.5) < 1e-3
+    grows = drive(450.0, dt, 20, integrator="explicit")       # k·dt = 3: the error doubles every tick
+    assert abs(grows[-1] - 0.5) == pytest.approx(0.5 * 2.0 ** 20, rel=1e-9)
+
+
+def test_an_unknown_integrator_is_refused():
+    with pytest.raises(ValueError, match="integrator must be one of exact, explicit, not 'implicit'"):
+        ForceFields(1 / 150, "implicit")
 
 
 def test_force_scales_with_mass_so_every_bottle_accelerates_alike():
