@@ -1,4 +1,4 @@
-"""Command line: `planthub run|validate|test|describe|check-fmu|report|plot|serve-fmu|send|view` (also `python -m hub`)."""
+"""Command line: `planthub run|validate|test|describe|check-fmu|report|plot|compare|serve-fmu|send|view` (also `python -m hub`)."""
 from __future__ import annotations
 
 import argparse
@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 from hub.cli.bus import add_commands as add_bus_commands
+from hub.cli.compare import add_command as add_compare_command
 from hub.cli.describe import describe
 from hub.cli.exits import BAD_SCENARIO, FAILED, INTERRUPTED, OK, TABLE, USAGE, UsageError
 from hub.cli.logs import diagnostics
@@ -108,7 +109,8 @@ def parser() -> tuple[argparse.ArgumentParser, dict]:
                 "describe": lambda args: describe(args.module), "check-fmu": _check_fmu, "report": _report,
                 **add_bus_commands(sub, parents=loud, formatter=_FORMAT, epilog=TABLE),
                 "view": add_view_command(sub, parents=loud, formatter=_FORMAT, epilog=TABLE),
-                "plot": add_plot_command(sub, parents=loud, formatter=_FORMAT, epilog=TABLE)}
+                "plot": add_plot_command(sub, parents=loud, formatter=_FORMAT, epilog=TABLE),
+                "compare": add_compare_command(sub, parents=loud, formatter=_FORMAT, epilog=TABLE)}
     return top, handlers
 
 
