@@ -1,13 +1,13 @@
-"""`make bench`: speed against error, and the hub's cost next to its floor, measured in one run.
+"""`make bench`'s cost sections for the hub's parts (tests/bench_report.py puts them in the report):
+bottle models, FMU stepping, event latency, the recorder's flush; and the timing helpers they share.
 
 Benchmarks report; they assert nothing. Each figure is the median of several repeats, and each
-hub figure stands beside its floor (bare pybullet stepping of the same bodies) from the same
-run, because this 2-core machine is noisy: read the ratios.
+hub figure stands beside its floor (bare pybullet stepping of the same bodies, a plain Python
+call for an FMU step) from the same run, because this 2-core machine is noisy: read the ratios.
 """
 from __future__ import annotations
 
 import statistics
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -16,9 +16,7 @@ from hub.run.assembly import Run
 from hub.run.plant import Plant
 from hub.scenario.checker import load_scenario
 
-from .bench_plant import plant_elements
 from .helpers import ROOT
-from .test_belt_bottle_sensor import analytical_enter_time
 
 BELT = ROOT / "scenarios" / "belt_bottle_sensor.yaml"
 REPEATS = 5
@@ -50,43 +48,19 @@ def floor_run(scenario):
     return go
 
 
-def rate_sweep() -> None:
-    print("## Physics rate: speed against error (belt_bottle_sensor, 3.5 s simulated)\n")
-    print("| physics rate | k·dt | enter-time error | hub real-time factor | bare pybullet real-time factor | hub / bare |")
-    print("|---:|---:|---:|---:|---:|---:|")
-    for rate, k in [(60, 16.0), (150, 16.0), (300, 16.0), (1000, 16.0), (60, 150.0)]:
-        scenario = load_scenario(BELT, {"run.physics_rate": rate, "objects.belt.k": k})
-        expected = analytical_enter_time(scenario)
-        recorder = hub_run(scenario, None)()
-        measured = recorder.stats["barrier.trigger.on_enter"].first_tick / rate
-        hub = timed(hub_run(scenario, None))
-        bare = timed(floor_run(scenario))
-        sim = scenario.run.end_tick / rate
-        print(f"| {rate} Hz | {k / rate:.3f} | {100 * (measured - expected) / expected:+.3f} % "
-              f"| {sim / hub:.0f}× | {sim / bare:.0f}× | {hub / bare:.2f} |")
-
-
-def bottle_scaling() -> None:
-    print("\n## Cost per physics tick with N bottles on one belt (150 Hz, 10 s simulated)\n")
-    print("| bottles | hub µs/tick | bare pybullet µs/tick | hub / bare | hub real-time factor |")
-    print("|---:|---:|---:|---:|---:|")
-    for n in (1, 10, 50, 100):
-        with tempfile.TemporaryDirectory() as tmp:
-            path = Path(tmp) / "line.yaml"
-            spacing = 0.08
-            bottles = "\n".join(
-                f"  b{i}: {{module: bottle, position: [{0.04 + i * spacing:.3f}, 0, 0]}}" for i in range(n))
-            path.write_text(
-                "planthub: 1\nrun: {duration: 10, physics_rate: 150}\nobjects:\n"
-                f"  belt: {{module: conveyor, position: [0, 0, 0], length: {n * spacing + 6:.2f}, speed: 0.5}}\n"
-                f"  gate: {{module: light_barrier, position: [{n * spacing + 1:.2f}, 0, 0.05]}}\n"
-                + bottles + "\n")
-            scenario = load_scenario(path)
-        ticks = scenario.run.end_tick
-        hub = timed(hub_run(scenario, None))
-        bare = timed(floor_run(scenario))
-        print(f"| {n} | {1e6 * hub / ticks:.0f} | {1e6 * bare / ticks:.0f} | {hub / bare:.2f} "
-              f"| {scenario.run.end_tick / scenario.run.physics_rate / hub:.1f}× |")
+def line_scene(n: int, seconds: float = 10.0):
+    """`n` bottles 8 cm apart on one long belt at 0.5 m/s (150 Hz), a light barrier past them."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "line.yaml"
+        spacing = 0.08
+        bottles = "\n".join(
+            f"  b{i}: {{module: bottle, position: [{0.04 + i * spacing:.3f}, 0, 0]}}" for i in range(n))
+        path.write_text(
+            f"planthub: 1\nrun: {{duration: {seconds}, physics_rate: 150}}\nobjects:\n"
+            f"  belt: {{module: conveyor, position: [0, 0, 0], length: {n * spacing + 6:.2f}, speed: 0.5}}\n"
+            f"  gate: {{module: light_barrier, position: [{n * spacing + 1:.2f}, 0, 0.05]}}\n"
+            + bottles + "\n")
+        return load_scenario(path)
 
 
 class PythonBeltDrive:
@@ -207,27 +181,3 @@ def flush_cost() -> None:
     floor = statistics.median(samples["never (closed only)"])
     for name, values in samples.items():
         print(f"| {name} | {statistics.median(values):.1f} | {statistics.median(values) / floor:.3f} |")
-
-
-def main() -> int:
-    print(f"planthub benchmark — median of {REPEATS} runs each, Python {sys.version.split()[0]}\n")
-    rate_sweep()
-    bottle_scaling()
-    bottle_models()
-    fmu_stepping()
-    event_latency()
-    plant_elements()
-    flush_cost()
-    from .bench_bus import bus_lockstep, data_plane, watched_plant   # Zenoh: lockstep, data plane, watchers
-
-    bus_lockstep()
-    data_plane()
-    watched_plant()
-    from .bench_bottling import bottling_plant   # the whole plant, 100 bottles on the line
-
-    bottling_plant()
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -78,6 +78,19 @@ def interpreter_costs(name, steps):
     return per_step(step, steps), per_step(exchange, steps)
 
 
+def markdown(steps: int = 20000) -> None:
+    """The same figures as a markdown table (for `make bench`'s report)."""
+    print(f"\n## Petri-net state logic: µs per step, mean of {steps} steps of {H} s\n")
+    print("'with I/O' sets every input and reads every output; python: the same net in the interpreter, the floor.\n")
+    print("| net | engine | step µs | with I/O µs |")
+    print("|---|---|---:|---:|")
+    for name in PLANT_NETS:
+        rows = [(f"fmi{v}", *fmu_costs(name, v, steps)) for v in (2, 3)]
+        rows.append(("python", *interpreter_costs(name, steps)))
+        for engine, alone, with_io in rows:
+            print(f"| {name} | {engine} | {alone:.1f} | {with_io:.1f} |")
+
+
 def main(argv):
     steps = int(argv[0]) if argv else 20000
     print(f"µs per step, mean of {steps} steps of {H} s; 'with I/O' sets every put and reads every output")
