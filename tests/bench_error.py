@@ -8,9 +8,9 @@ REPEATS runs of the step loop, building excluded); error is measured
 
 - against the **analytical** solution where there is one: a free bottle's belt spin-up,
   v(t) = v_tar·(1 − e^(−k·t)) (the paper's first test), and its arrival at a light barrier;
-- otherwise against a **reference run** of the same scene: 1 kHz, 50 solver iterations, the
-  paper's two-body bottle (`base_body`) where the scene leaves the model open — the most detailed
-  settings the hub has. Metrics: bottle positions over time (RMS and max of the distance to the
+- otherwise against a **reference run** of the same scene: 1 kHz and 50 solver iterations (the
+  paper's loop also with its two-body bottle, `base_body`; the bottling plant at 300 Hz, the
+  highest rate at which it is sound — see its scene). Metrics: bottle positions over time (RMS and max of the distance to the
   reference's at its times), event times (each trigger's and sink's events matched in order, the
   largest shift, and how many have no partner), and scene figures (queue depth into the gate, tilt).
 
@@ -244,8 +244,12 @@ def scenes() -> list[Scene]:
               [DEFAULT, *rates(60, 300), *iterations(5, 10, 50), *MODELS, *REST, *EVENTS, *steps(0.1)]),
         Scene("plant", "The bottling plant, its first 60 s (15 deliveries; routing in the hub)", PLANT,
               ["sink_A.count.total"], plant_error, "delivery shift ms", "reference",
-              [DEFAULT, *rates(300), *explicit(150), *iterations(10, 50), *REST, *EVENTS],
-              base={"run.duration": 60.0, "objects.control.in_process": True}, repeats=2),
+              [DEFAULT, *rates(100), *explicit(150), *iterations(10, 50), *REST, *EVENTS],
+              base={"run.duration": 60.0, "objects.control.in_process": True}, repeats=2,
+              # Not 1 kHz: above 300 Hz the plant is not sound (measured 2 December 2026, first 60 s):
+              # at 600 Hz with 20 iterations it delivers 7 bottles, not 15; at 600 Hz and 1 kHz with
+              # 50 a bottle is thrown out of the world and the physics watch ends the run.
+              reference={"run.physics_rate": 300, "run.solver_iterations": 50}),
     ]
 
 

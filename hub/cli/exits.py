@@ -4,7 +4,7 @@ from __future__ import annotations
 from hub.core.errors import PlanthubError
 
 OK = 0
-FAILED = 1        # the run failed (a participant lost, an FMU's error), an expectation failed, an FMU does not fit
+FAILED = 1        # the run failed (a participant lost, an FMU's error), an expectation failed, `compare` found a deviation, an FMU does not fit
 USAGE = 2         # the command line is wrong: argparse's own code for it
 BAD_SCENARIO = 3  # the scenario, or a file it names, does not pass its checks
 INTERRUPTED = 130  # Ctrl-C: 128 + SIGINT, as shells report it (SIGTERM: 143, hub/run/interruption.py)
