@@ -48,18 +48,21 @@ def floor_run(scenario):
     return go
 
 
-def line_scene(n: int, seconds: float = 10.0):
-    """`n` bottles 8 cm apart on one long belt at 0.5 m/s (150 Hz), a light barrier past them."""
+def line_scene(n: int, seconds: float = 10.0, barriers: int = 1):
+    """`n` bottles 8 cm apart on one long belt at 0.5 m/s (150 Hz), `barriers` light barriers
+    10 cm apart past them (each watched by the recording, so its trigger is evaluated)."""
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "line.yaml"
         spacing = 0.08
         bottles = "\n".join(
             f"  b{i}: {{module: bottle, position: [{0.04 + i * spacing:.3f}, 0, 0]}}" for i in range(n))
+        gates = "".join(f"  gate{g}: {{module: light_barrier, position: [{n * spacing + 1 + 0.1 * g:.2f}, 0, 0.05]}}\n"
+                        for g in range(barriers))
+        record = "".join(f"  - gate{g}.trigger.occupied\n" for g in range(barriers))
         path.write_text(
             f"planthub: 1\nrun: {{duration: {seconds}, physics_rate: 150}}\nobjects:\n"
-            f"  belt: {{module: conveyor, position: [0, 0, 0], length: {n * spacing + 6:.2f}, speed: 0.5}}\n"
-            f"  gate: {{module: light_barrier, position: [{n * spacing + 1:.2f}, 0, 0.05]}}\n"
-            + bottles + "\n")
+            f"  belt: {{module: conveyor, position: [0, 0, 0], length: {n * spacing + 6 + 0.1 * barriers:.2f}, "
+            f"speed: 0.5}}\n" + gates + bottles + "\n" + (f"record:\n{record}" if record else ""))
         return load_scenario(path)
 
 

@@ -255,13 +255,26 @@ def scaling_section(report: Report) -> dict:
         print(f"  scaling: {n} bottles", file=sys.stderr, flush=True)
     real_time = {kind: crossing(counts, [f[f"{kind}_us_per_tick"] for f in figures], 1e6 / 150)
                  for kind in ("hub", "bare")}
-    report.figures["scaling"] = {"points": figures, "bottles_in_real_time_150Hz": real_time}
+    sensors = []
+    for barriers in (0, 10, 50, 100):
+        scenario = line_scene(50, seconds=2.0, barriers=barriers)
+        sensors.append((barriers, timed(hub_run(scenario, None)) / scenario.run.end_tick))
+    print("  scaling: sensors", file=sys.stderr, flush=True)
+    report.figures["scaling"] = {"points": figures, "bottles_in_real_time_150Hz": real_time,
+                                 "sensors": [{"barriers": b, "hub_us_per_tick": 1e6 * c} for b, c in sensors]}
     report.add("# The hub against bare pybullet: N bottles on one belt\n\n"
                "150 Hz, 2 s simulated, every bottle awake and on a running belt; bare pybullet steps the same bodies "
                "(no fields, reads or triggers): the floor. Medians of 5, side by side.\n\n"
                + table(["bottles", "hub µs/tick", "bare pybullet µs/tick", "hub / bare", "hub real-time factor"], rows)
                + f"\n\nBottles in real time at 150 Hz on one core (6667 µs a tick; interpolated): hub "
-                 f"{fmt(real_time['hub'])}, bare pybullet {fmt(real_time['bare'])}.")
+                 f"{fmt(real_time['hub'])}, bare pybullet {fmt(real_time['bare'])}.\n\n"
+               "Light barriers: 50 bottles on the belt, N barriers past them, each recorded (so its trigger is "
+               "evaluated at every tick); the floor is the same run without one.\n\n"
+               + table(["light barriers", "hub µs/tick", "× none", "µs per barrier"],
+                       [[str(b), f"{1e6 * c:.0f}", f"{c / sensors[0][1]:.2f}",
+                         "—" if b == 0 else f"{1e6 * (c - sensors[0][1]) / b:.2f}"] for b, c in sensors])
+               + "\n\nFMUs and participants next to their floors: *Logic stepping* (an FMU step against the same "
+                 "logic as a Python call) and *Lockstep over Zenoh* (against bare Zenoh ping-pong), below.")
     return report.figures["scaling"]
 
 
@@ -271,6 +284,29 @@ def crossing(counts, costs, budget: float) -> float | None:
         if c0 <= budget <= c1:
             return n0 + (budget - c0) * (n1 - n0) / (c1 - c0)
     return None
+
+
+# --- the hard cases at full length (make stability) ---------------------------------------------
+def stability_section(report: Report) -> None:
+    """build/bench/stability.json, which `make stability` writes (it takes ~25 min, so `make bench`
+    does not run it): each long hard case, its bounds and what was measured."""
+    path = OUT / "stability.json"
+    if not path.is_file():
+        report.add("# Hard cases at full length\n\nNot in this report: `make stability` runs them (10 simulated "
+                   "minutes of a jam, an hour of the paper's loop and of the bottling plant; ~25 min) and writes "
+                   "build/bench/stability.json, which the next `make bench` puts here.")
+        return
+    found = json.loads(path.read_text())
+    report.figures["stability"] = found
+    rows = [[c["name"], f"{c['simulated_seconds']:g}", f"{c['wall_seconds']:.0f}", "passed" if c["passed"] else
+             "**failed**" + (f": {c['error']}" if c["error"] else ""),
+             "; ".join(f"{b['name']} {fmt(b['measured']) if isinstance(b['measured'], float) else b['measured']}"
+                       f"{(' ' + b['unit']) if b['unit'] else ''} ({'≥' if b['relation'] == '>=' else '≤'} {b['limit']:g})"
+                       for b in c["bounds"])] for c in found["cases"]]
+    report.add("# Hard cases at full length (`make stability`)\n\n"
+               f"From {path.name} ({time.strftime('%Y-%m-%d %H:%M', time.localtime(path.stat().st_mtime))}); the "
+               "bounds and what they were set from are in tests/hard/cases.py.\n\n"
+               + table(["case", "simulated s", "wall s", "result", "bounds: measured (bound)"], rows))
 
 
 # --- the cost sections of before ----------------------------------------------------------------
@@ -298,6 +334,7 @@ def main(parts: list[str]) -> int:
     parts = parts or ["error", "scaling", "costs"]
     found = error_sections(report) if "error" in parts else {}
     scaling = scaling_section(report) if "scaling" in parts else None
+    stability_section(report)
     if "costs" in parts:
         cost_sections(report)
     headline = ["# planthub benchmark report", "",
