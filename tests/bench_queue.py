@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hub.core.errors import SimulationError
 from hub.physics import PhysicsWorld
 from hub.run.assembly import Run
 from hub.scenario.checker import load_scenario
@@ -63,7 +64,10 @@ def judge(path: Path, bottles: int) -> dict:
 
     with Run(scenario, observers=[Watch()]) as run:
         w = run.plant.world
-        run.run()
+        try:
+            run.run()
+        except SimulationError:   # the physics watch: a bottle fell through the floor, the queue fell apart
+            return {"depth": math.inf, "overlap": math.inf, "sink": math.inf, "tilt": max(seen["tilt"], 90.0)}
     return {"depth": 1000 * max(seen["depth"]), "overlap": 1000 * max(seen["overlap"]),
             "sink": 1000 * max(seen["sink"]), "tilt": seen["tilt"]}
 
