@@ -20,7 +20,6 @@ class Engine:
 
     def __init__(self, dt: float, gravity: float, solver_iterations: int):
         self.client = pybullet.connect(pybullet.DIRECT)
-        self.solver_iterations = solver_iterations
         self.call(pybullet.setGravity, 0.0, 0.0, gravity)
         self.call(
             pybullet.setPhysicsEngineParameter,
@@ -33,6 +32,11 @@ class Engine:
         # Every fixed box made here, (body, centre, half extents, yaw) in the world frame: the
         # world's box and the placement check at load read them (watch.py, placement.py).
         self.static: list[tuple[int, tuple, tuple, float]] = []
+
+    @property
+    def solver_iterations(self) -> int:
+        """The constraint solver's iterations per tick, as the engine has them."""
+        return int(self.call(pybullet.getPhysicsEngineParameters)["numSolverIterations"])
 
     def call(self, fn, *args, **kwargs):
         return fn(*args, physicsClientId=self.client, **kwargs)
