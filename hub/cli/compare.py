@@ -8,8 +8,8 @@ from fnmatch import fnmatchcase
 from pathlib import Path
 
 from hub.cli.exits import FAILED, OK, UsageError
-# plot's reading of the command line: the same run-folder errors, the same slot addressing and globs
-from hub.cli.plot import _is_glob, _match, _names, _recording_of, _seconds, _slots
+# plot's reading of the command line (shared): the same run-folder errors, the same slot addressing and globs
+from hub.cli.plot import is_glob, match_slots, listed_names, recording_of, seconds_argument, slots_of_columns
 from hub.core.registry import did_you_mean
 from hub.reports.compare import DEFAULT_ATOL, DEFAULT_RTOL, Recorded, compare, plot_failures, png_name
 
@@ -44,8 +44,8 @@ def add_command(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str =
     command.add_argument("--slots", nargs="+", action="extend", metavar="SLOT",
                          help="only these: recorded slots (a vec3 with its components, or SLOT.x), event slots, "
                               "or globs of them ('bottle.body.*'); default: all the reference records and logs")
-    command.add_argument("--from", dest="start", type=_seconds, metavar="T", help="s: judge from this time on")
-    command.add_argument("--to", dest="end", type=_seconds, metavar="T", help="s: judge up to this time")
+    command.add_argument("--from", dest="start", type=seconds_argument, metavar="T", help="s: judge from this time on")
+    command.add_argument("--to", dest="end", type=seconds_argument, metavar="T", help="s: judge up to this time")
     command.add_argument("--out", type=Path, metavar="DIR",
                          help="folder for a PNG per failing signal (default: RUN/compare)")
     command.set_defaults(command_parser=command)
@@ -65,7 +65,7 @@ def _tolerance(text: str) -> float:
 def _compare(args) -> int:
     for label, folder in (("RUN", args.run), ("REFERENCE", args.reference)):
         try:
-            _recording_of(folder)
+            recording_of(folder)
         except UsageError as exc:
             raise UsageError(f"{label} {exc}") from None
     if args.start is not None and args.end is not None and args.start >= args.end:
@@ -114,11 +114,11 @@ def _chosen(specs: list[str], run: Recorded, ref: Recorded) -> list[str]:
     (a vec3 slot stands for its components), and the slots of either event log; every spec that
     picks nothing named at once, with a did-you-mean."""
     columns = list(ref.columns)
-    slots = _slots(columns)
+    slots = slots_of_columns(columns)
     logged = sorted(set(ref.event_slots) | set(run.event_slots))
     picked, unmatched = [], []
     for spec in specs:
-        found = _match(spec, slots, columns) + [s for s in logged if s == spec or fnmatchcase(s, spec)]
+        found = match_slots(spec, slots, columns) + [s for s in logged if s == spec or fnmatchcase(s, spec)]
         picked += [name for name in found if name not in picked]
         if not found:
             unmatched.append(spec)
@@ -128,9 +128,9 @@ def _chosen(specs: list[str], run: Recorded, ref: Recorded) -> list[str]:
         for spec in unmatched:
             hint = did_you_mean(spec, names)
             hint = hint if hint.startswith(" (did you mean") else ""
-            lines.append(f"no recorded or logged slot matches {spec!r}{hint}" if _is_glob(spec)
+            lines.append(f"no recorded or logged slot matches {spec!r}{hint}" if is_glob(spec)
                          else f"neither recorded nor logged: {spec!r}{hint}")
-        recorded = _names(name for name in slots) or "nothing"
-        events = f"; the event logs name {_names(logged)}" if logged else "; the event logs are empty"
+        recorded = listed_names(name for name in slots) or "nothing"
+        events = f"; the event logs name {listed_names(logged)}" if logged else "; the event logs are empty"
         raise UsageError(f"--slots: {'; '.join(lines)}. {ref.folder / 'recording.csv'} records {recorded}{events}")
     return picked

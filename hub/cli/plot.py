@@ -41,8 +41,8 @@ def add_command(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str =
                       help="a recorded slot, object.component.slot (a vec3's components together, or one: "
                            "SLOT.x), or a glob of them ('sink_*.count.total'); each gets a panel")
     plot.add_argument("--out", type=Path, metavar="FILE.png", help="the PNG to write (default: RUN_DIR/plot.png)")
-    plot.add_argument("--from", dest="start", type=_seconds, metavar="T", help="s: draw from this time on")
-    plot.add_argument("--to", dest="end", type=_seconds, metavar="T", help="s: draw up to this time")
+    plot.add_argument("--from", dest="start", type=seconds_argument, metavar="T", help="s: draw from this time on")
+    plot.add_argument("--to", dest="end", type=seconds_argument, metavar="T", help="s: draw up to this time")
     plot.add_argument("--events", action="append", default=[], metavar="PATTERN",
                       help="also mark the times of the events in events.csv whose slot matches, a name or a glob "
                            "('barrier.trigger.*'); repeatable")
@@ -50,7 +50,7 @@ def add_command(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str =
     return _plot
 
 
-def _seconds(text: str) -> float:
+def seconds_argument(text: str) -> float:
     try:
         value = float(text)
     except ValueError:
@@ -70,7 +70,7 @@ class Slot:
 def _plot(args) -> int:
     from hub.reports.plots import Line, Panel, draw
 
-    recording = _recording_of(args.run)
+    recording = recording_of(args.run)
     out = args.out or args.run / "plot.png"
     if out.suffix.lower() != ".png":
         raise UsageError(f"--out {out}: planthub plot writes a PNG, so name a .png file")
@@ -79,7 +79,7 @@ def _plot(args) -> int:
     header = _header(recording)
     slots = _select(args.slots, header, recording)
     if len(slots) > MAX_PANELS:
-        raise UsageError(f"{len(slots)} slots picked from {recording} ({_names(s.name for s in slots)}): at most "
+        raise UsageError(f"{len(slots)} slots picked from {recording} ({listed_names(s.name for s in slots)}): at most "
                          f"{MAX_PANELS} panels fit in one plot; name fewer")
     wanted = [c for slot in slots for c in slot.columns]
     times, values = _read(recording, header, wanted, args.start, args.end)
@@ -105,13 +105,13 @@ def _plot(args) -> int:
              xlim=window if window[0] < window[1] else None)
     except OSError as exc:
         raise PlanthubError(f"cannot write {out}: {exc.strerror or exc}") from None
-    _log.info(f"planthub plot: {_count(len(panels), 'panel')} ({_names(s.name for s in slots)}), "
+    _log.info(f"planthub plot: {_count(len(panels), 'panel')} ({listed_names(s.name for s in slots)}), "
               f"t = {window[0]:g}–{window[1]:g} s, {_count(len(times), 'point')}")
     print(out)
     return OK
 
 
-def _recording_of(run: Path) -> Path:
+def recording_of(run: Path) -> Path:
     """RUN_DIR/recording.csv, or an error that says what RUN_DIR is instead."""
     if not run.exists():
         raise UsageError(f"{run}: no such folder (give the run folder `planthub run --out DIR` wrote)")
@@ -126,7 +126,7 @@ def _recording_of(run: Path) -> Path:
     if present:
         raise UsageError(f"{recording}: no such file (the run folder holds only {', '.join(present)})")
     inside = sorted(str(d) for d in run.iterdir() if d.is_dir() and (d / "recording.csv").is_file())
-    where = f"; run folders in it: {_names(inside)}" if inside else ""
+    where = f"; run folders in it: {listed_names(inside)}" if inside else ""
     raise UsageError(f"{run} is not a run folder: it holds none of {', '.join(RUN_FILES)} "
                      f"(what `planthub run --out DIR` writes){where}")
 
@@ -142,7 +142,7 @@ def _header(recording: Path) -> list[str]:
     return header
 
 
-def _slots(columns: list[str]) -> dict[str, list[str]]:
+def slots_of_columns(columns: list[str]) -> dict[str, list[str]]:
     """Slot name → its columns, in the recording's order: a vec3 or quat slot's .x, .y, .z(, .w) under
     its own name. A slot's address has three parts, so `a.b.x` is a slot, not a component."""
     present = set(columns)
@@ -157,14 +157,14 @@ def _slots(columns: list[str]) -> dict[str, list[str]]:
 def _select(specs: list[str], header: list[str], recording: Path) -> list[Slot]:
     """The panels the SLOT arguments ask for, in their order; every problem named at once."""
     columns = header[1:]
-    slots = _slots(columns)
+    slots = slots_of_columns(columns)
     of_column = {c: name for name, cs in slots.items() for c in cs}
     if not columns:
         raise PlanthubError(f"{recording} records no slot, only the time: the scenario has no `record:` list")
     picked: dict[str, list[str]] = {}
     problems = []
     for spec in specs:
-        found = _match(spec, slots, columns)
+        found = match_slots(spec, slots, columns)
         if not found:
             problems.append(spec)
         for column in found:
@@ -172,24 +172,24 @@ def _select(specs: list[str], header: list[str], recording: Path) -> list[Slot]:
             if column not in chosen:
                 chosen.append(column)
     if problems:
-        listed = _names(f"{name} ({', '.join(c.rpartition('.')[2] for c in cs)})" if cs != [name] else name
+        listed = listed_names(f"{name} ({', '.join(c.rpartition('.')[2] for c in cs)})" if cs != [name] else name
                         for name, cs in slots.items())
         names = [*slots, *columns]
         lines = []
         for spec in problems:
             hint = did_you_mean(spec, names)
-            kind = "no recorded slot matches" if _is_glob(spec) else "not recorded:"
+            kind = "no recorded slot matches" if is_glob(spec) else "not recorded:"
             lines.append(f"{kind} {spec!r}{hint if hint.startswith(' (did you mean') else ''}")
         raise UsageError(f"{recording}: {'; '.join(lines)}. It records: {listed}")
     return [Slot(name, [c for c in slots[name] if c in chosen]) for name, chosen in picked.items()]
 
 
-def _match(spec: str, slots: dict[str, list[str]], columns: list[str]) -> list[str]:
+def match_slots(spec: str, slots: dict[str, list[str]], columns: list[str]) -> list[str]:
     if spec in slots:
         return slots[spec]
     if spec in columns:
         return [spec]
-    if _is_glob(spec):
+    if is_glob(spec):
         hits = {c for name, cs in slots.items() if fnmatchcase(name, spec) for c in cs}
         hits |= {c for c in columns if fnmatchcase(c, spec)}
         return [c for c in columns if c in hits]
@@ -201,7 +201,7 @@ def _match(spec: str, slots: dict[str, list[str]], columns: list[str]) -> list[s
     return []
 
 
-def _is_glob(text: str) -> bool:
+def is_glob(text: str) -> bool:
     return any(c in text for c in "*?[")
 
 
@@ -278,7 +278,7 @@ def _marks(run: Path, patterns: list[str], first: float, last: float):
         times = [t for t, slot in events if slot == pattern or fnmatchcase(slot, pattern)]
         if not times:
             hint = did_you_mean(pattern, logged)
-            known = f"; it logs {_names(logged)}" if logged else "; it logs no event"
+            known = f"; it logs {listed_names(logged)}" if logged else "; it logs no event"
             _log.warning(f"planthub plot: warning: --events {pattern!r}: no event in {log} matches"
                          f"{hint if hint.startswith(' (did you mean') else ''}{known}")
             continue
@@ -296,7 +296,7 @@ def _count(n: int, thing: str) -> str:
     return f"{n} {thing}{'s' if n != 1 else ''}"
 
 
-def _names(names) -> str:
+def listed_names(names) -> str:
     names = list(names)
     shown = ", ".join(names[:_LISTED])
     return shown + (f", … ({len(names)} in all)" if len(names) > _LISTED else "")
