@@ -285,7 +285,7 @@ class PhysicsWorld:
 
     def check_start(self) -> None:
         """Before the first tick: bodies placed overlapping are an error (the engine would eject
-        them); the watch's box and bound are fixed; a trigger a bottle could jump is a warning."""
+        them); the watch's box and bound are fixed; a trigger or a gate a bottle could jump is a warning."""
         b = self.bodies
         if not self.watch.enabled:
             return
@@ -302,7 +302,10 @@ class PhysicsWorld:
         play = b.in_play_rows()
         self.watch.arm(lo.min(0) if len(lo) else np.full(3, np.inf), hi.max(0) if len(hi) else np.full(3, -np.inf),
                        b.positions[play], fastest)
-        for message in self.triggers.jumpable(fastest * self.dt, b.radii[play]):
+        jumps = self.triggers.jumpable(fastest * self.dt, b.radii[play])
+        if len(b.radii[play]):
+            jumps += self.parts.jumpable(fastest * self.dt, float(np.min(b.radii[play])))
+        for message in jumps:
             self.warnings.append(message)
             _log.warning("%s", message)
 

@@ -145,6 +145,16 @@ def test_a_trigger_a_bottle_can_jump_between_ticks_is_reported_at_load(caplog):
     assert slow.warnings == []
 
 
+def test_a_gate_a_bottle_may_pass_through_between_ticks_is_reported_at_load(caplog):
+    with caplog.at_level(logging.WARNING, logger="hub.physics.world"):
+        world, _ = run("watch_thin_gate")
+    assert len(world.warnings) == 1
+    assert world.warnings[0].startswith("gate or blade 0 at (1.500, 0.000, ") and "is 5.0 mm thick" in world.warnings[0]
+    assert "a bottle of 60 mm moving 41.7 mm per tick (the fastest belt) may pass through it" in caplog.text
+    slow, _ = run("watch_thin_gate", **{"run.physics_rate": 150})   # 16.7 mm per tick: held
+    assert slow.warnings == []
+
+
 def test_a_shipped_scenario_runs_watched_and_unwarned():
     """The watch is on in a shipped scenario (a finite box and bound) and finds nothing there;
     every shipped scenario runs watched in tests/test_plant_scenarios.py."""
