@@ -18,7 +18,8 @@ from PIL import Image
 
 from hub.cli.main import main
 from hub.core.errors import PlanthubError
-from hub.reports.compare import band, compare, held_within, match_events, plot_failures, resample, window_min
+from hub.reports.compare import band, compare, held_within, match_events, resample, window_min
+from hub.reports.compare_plots import plot_failures
 
 from .helpers import ROOT, run_scenario
 

@@ -11,7 +11,8 @@ from hub.cli.exits import FAILED, OK, UsageError
 # plot's reading of the command line (shared): the same run-folder errors, the same slot addressing and globs
 from hub.cli.plot import is_glob, match_slots, listed_names, recording_of, seconds_argument, slots_of_columns
 from hub.core.registry import did_you_mean
-from hub.reports.compare import DEFAULT_ATOL, DEFAULT_RTOL, Recorded, compare, plot_failures, png_name
+from hub.reports.compare import DEFAULT_ATOL, DEFAULT_RTOL, Recorded, compare
+from hub.reports.compare_plots import plot_failures, png_name
 
 _log = logging.getLogger("planthub.compare")
 
