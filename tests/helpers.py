@@ -28,3 +28,15 @@ def planthub_run(scenario, out: Path, *sets: str):
                           capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 0, proc.stderr
     return proc.stdout, json.loads((out / "summary.json").read_text())
+
+
+def planthub(capsys, *argv) -> tuple[int, str, str]:
+    """`planthub ARGV` in this process: (exit code, stdout, stderr); argparse's usage errors too."""
+    from hub.cli.main import main
+
+    try:
+        code = main([str(a) for a in argv])
+    except SystemExit as exc:   # argparse's own usage errors
+        code = exc.code
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err

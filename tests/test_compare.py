@@ -16,12 +16,11 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from hub.cli.main import main
 from hub.core.errors import PlanthubError
 from hub.reports.compare import band, compare, held_within, match_events, resample, window_min
 from hub.reports.compare_plots import plot_failures
 
-from .helpers import ROOT, run_scenario
+from .helpers import ROOT, planthub, run_scenario
 
 SCENARIO = ROOT / "scenarios" / "belt_bottle_sensor.yaml"
 RECORD = ["bottle.body.position", "bottle.body.velocity", "barrier.trigger.occupied", "barrier.trigger.object"]
@@ -42,12 +41,7 @@ def runs(tmp_path_factory):
 
 def planthub_compare(capsys, *args):
     """`planthub compare ARGS` in this process: (exit code, stdout, stderr)."""
-    try:
-        code = main(["compare", *map(str, args)])
-    except SystemExit as exc:   # argparse's own usage errors
-        code = exc.code
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
+    return planthub(capsys, "compare", *args)
 
 
 def line_of(out: str, name: str) -> str:

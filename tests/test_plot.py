@@ -8,9 +8,8 @@ import sys
 import pytest
 from PIL import Image, ImageChops
 
-from hub.cli.main import main
 
-from .helpers import ROOT
+from .helpers import ROOT, planthub
 
 #   barrier.trigger.on_enter ──► stop.value.set, stop.value.out (false) ──► belt.drive.run
 #   recorded: bottle.body.position (x, y, z), belt.drive.running, barrier.trigger.on_enter
@@ -31,12 +30,7 @@ def run(tmp_path_factory):
 
 def plot(capsys, *args):
     """`planthub plot ARGS` in this process: (exit code, stdout, stderr)."""
-    try:
-        code = main(["plot", *map(str, args)])
-    except SystemExit as exc:   # argparse's own usage errors
-        code = exc.code
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
+    return planthub(capsys, "plot", *args)
 
 
 def png(path):

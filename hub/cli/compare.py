@@ -9,7 +9,8 @@ from pathlib import Path
 
 from hub.cli.exits import FAILED, OK, UsageError
 # plot's reading of the command line (shared): the same run-folder errors, the same slot addressing and globs
-from hub.cli.plot import is_glob, match_slots, listed_names, recording_of, seconds_argument, slots_of_columns
+from hub.cli.options import number_type, seconds_argument
+from hub.cli.plot import is_glob, match_slots, listed_names, recording_of, slots_of_columns
 from hub.core.registry import did_you_mean
 from hub.reports.compare import DEFAULT_ATOL, DEFAULT_RTOL, Recorded, compare
 from hub.reports.compare_plots import plot_failures, png_name
@@ -53,14 +54,8 @@ def add_command(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str =
     return _compare
 
 
-def _tolerance(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number ≥ 0, got {text!r}") from None
-    if not (math.isfinite(value) and value >= 0):
-        raise argparse.ArgumentTypeError(f"expected a finite number ≥ 0, got {text!r}")
-    return value
+_tolerance = number_type("expected a number ≥ 0, got {text}", "expected a finite number ≥ 0, got {text}",
+                         lambda v: math.isfinite(v) and v >= 0)
 
 
 def _compare(args) -> int:

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from hub.scenario.yamlsource import read_value
@@ -54,14 +55,24 @@ def _key_value(item: str) -> tuple[str, object, str]:
         raise argparse.ArgumentTypeError(f"{key}={value}: {exc}") from None
 
 
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"needs a positive factor, got {value:g}")
-    return value
+def number_type(unparsed: str, refused: str, accept):
+    """An argparse `type` for a number: `unparsed` is the message for text that is no number
+    ({text} in it), `refused` for a number `accept(value)` rejects ({text} or {value})."""
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(unparsed.format(text=repr(text))) from None
+        if not accept(value):
+            raise argparse.ArgumentTypeError(refused.format(text=repr(text), value=f"{value:g}"))
+        return value
+    return parse
+
+
+_positive = number_type("expected a number, got {text}", "needs a positive factor, got {value}", lambda v: v > 0)
+#: s, any finite time (`plot` and `compare`'s --from and --to)
+seconds_argument = number_type("expected a time in seconds, got {text}", "expected a finite time in seconds, got {text}",
+                               math.isfinite)
 
 
 def add_run_arguments(parser: argparse.ArgumentParser, out_help: str) -> None:

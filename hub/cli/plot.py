@@ -4,12 +4,12 @@ from __future__ import annotations
 import argparse
 import csv
 import logging
-import math
 from dataclasses import dataclass, replace
 from fnmatch import fnmatchcase
 from pathlib import Path
 
 from hub.cli.exits import OK, UsageError
+from hub.cli.options import seconds_argument
 from hub.core.csvfiles import body_rows, reading
 from hub.core.errors import PlanthubError
 from hub.core.registry import did_you_mean
@@ -48,16 +48,6 @@ def add_command(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str =
                            "('barrier.trigger.*'); repeatable")
     plot.set_defaults(command_parser=plot)
     return _plot
-
-
-def seconds_argument(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a time in seconds, got {text!r}") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"expected a finite time in seconds, got {text!r}")
-    return value
 
 
 @dataclass

@@ -78,28 +78,30 @@ def interpreter_costs(name, steps):
     return per_step(step, steps), per_step(exchange, steps)
 
 
+def rows(steps: int):
+    """(net, engine, µs a step, µs a step with I/O) for every plant net: FMI 2, FMI 3, the interpreter."""
+    for name in PLANT_NETS:
+        for version in (2, 3):
+            yield (name, f"fmi{version}", *fmu_costs(name, version, steps))
+        yield (name, "python", *interpreter_costs(name, steps))
+
+
 def markdown(steps: int = 20000) -> None:
     """The same figures as a markdown table (for `make bench`'s report)."""
     print(f"\n## Petri-net state logic: µs per step, mean of {steps} steps of {H} s\n")
     print("'with I/O' sets every input and reads every output; python: the same net in the interpreter, the floor.\n")
     print("| net | engine | step µs | with I/O µs |")
     print("|---|---|---:|---:|")
-    for name in PLANT_NETS:
-        rows = [(f"fmi{v}", *fmu_costs(name, v, steps)) for v in (2, 3)]
-        rows.append(("python", *interpreter_costs(name, steps)))
-        for engine, alone, with_io in rows:
-            print(f"| {name} | {engine} | {alone:.1f} | {with_io:.1f} |")
+    for name, engine, alone, with_io in rows(steps):
+        print(f"| {name} | {engine} | {alone:.1f} | {with_io:.1f} |")
 
 
 def main(argv):
     steps = int(argv[0]) if argv else 20000
     print(f"µs per step, mean of {steps} steps of {H} s; 'with I/O' sets every put and reads every output")
     print(f"{'net':<14} {'engine':<8} {'step':>8} {'with I/O':>9}")
-    for name in PLANT_NETS:
-        rows = [(f"fmi{v}", *fmu_costs(name, v, steps)) for v in (2, 3)]
-        rows.append(("python", *interpreter_costs(name, steps)))
-        for engine, alone, with_io in rows:
-            print(f"{name:<14} {engine:<8} {alone:8.1f} {with_io:9.1f}")
+    for name, engine, alone, with_io in rows(steps):
+        print(f"{name:<14} {engine:<8} {alone:8.1f} {with_io:9.1f}")
 
 
 if __name__ == "__main__":
