@@ -37,7 +37,7 @@ from hub.core.component import Component
 from hub.core.module import Module
 from hub.core.slots import Slot
 
-from modules.params import POSITION, length
+from modules.params import POSITION, TRANSPORT, length
 from modules.plant import LOOK
 
 
@@ -132,6 +132,7 @@ class Bottle(Module):
             "mass": length(0.05, "kg"),
             "model": {"enum": list(MODELS), "default": "simple",
                       "description": "where the belt grips: simple (centre of mass), base_point, base_body (the paper's)"},
+            **TRANSPORT,
             "base_fraction": {"type": "number", "exclusiveMinimum": 0, "maximum": 0.5,
                               "description": f"model base_body: share of the mass in the second body "
                                              f"(default {BASE_FRACTION:g})"},
@@ -154,6 +155,9 @@ class Bottle(Module):
         if "base_fraction" in params and params["model"] != "base_body":
             problems.append((("base_fraction",), "only the base_body model has a second body: "
                                                  "add `model: base_body` or drop base_fraction"))
+        if params["transport"] == "exact" and (params["shape"] == "hull" or params["model"] == "base_body"):
+            problems.append((("transport",), "free transport moves a plain rigid bottle only: "
+                                             "it needs shape cylinder and model simple or base_point"))
         profile = params.get("profile")
         if profile is not None:
             if params["shape"] != "hull":
@@ -175,5 +179,6 @@ class Bottle(Module):
             hull = hull_points(params.get("profile") or default_profile(params["radius"], params["height"]))
         body = world.add_bottle(params["position"], params["radius"], params["height"], params["mass"], ident,
                                 hull=hull, grip_at=MODELS[params["model"]],
-                                base_fraction=params.get("base_fraction", BASE_FRACTION))
+                                base_fraction=params.get("base_fraction", BASE_FRACTION),
+                                transport=params["transport"], lookahead=params["lookahead"])
         return {"body": BottleBody(name, "body", world, body), "tag": Tag(name, "tag", ident)}

@@ -10,3 +10,14 @@ def length(default=None, description=""):
     if default is not None:
         schema["default"] = default
     return schema
+
+
+# A bottle's transport (hub/physics/transport.py): whether it may leave the engine while it rides
+# a belt on which nothing can touch it, and how many ticks its tests look forward.
+TRANSPORT = {
+    "transport": {"enum": ["engine", "exact"], "default": "engine",
+                  "description": "engine: the engine moves it throughout; exact: riding a belt with nothing within "
+                                 "reach it leaves the engine and follows the belt's law in numpy (free transport)"},
+    "lookahead": {"type": "integer", "minimum": 2, "default": 4,
+                  "description": "transport exact: ticks its tests look forward; they are taken every lookahead − 1 ticks"},
+}

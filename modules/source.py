@@ -42,7 +42,7 @@ from modules.plant import FIGURES, LOOK
 
 from modules.bottle import BottleBody
 from modules.manifest import register
-from modules.params import POSITION, length
+from modules.params import POSITION, TRANSPORT, length
 
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")   # an object name (schemas/scenario.schema.json)
@@ -131,6 +131,7 @@ class Source(Module):
             "radius": length(0.03, "bottle radius, m"),
             "height": length(0.1, "bottle height, m"),
             "mass": length(0.05, "bottle mass, kg"),
+            **TRANSPORT,
         },
         "required": ["position"],
         "additionalProperties": False,
@@ -193,7 +194,8 @@ class Source(Module):
         for ident, destination in cls.bottles(name, params, world.seed):
             if ident in world.labels:
                 raise SimulationError(f"object {name!r}: bottle id {ident!r} is already used by another bottle")
-            body = world.add_bottle(spot, r, h, params["mass"], ident)
+            body = world.add_bottle(spot, r, h, params["mass"], ident, transport=params["transport"],
+                                    lookahead=params["lookahead"])
             world.park(body)
             register(world, body, destination)
             bodies.append(body)

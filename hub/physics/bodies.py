@@ -20,7 +20,8 @@ class Bodies:
     the engine, rest.py) keeps its row as it was, which is what the engine holds for it. The
     rows that are read (`live_rows`) and those in play (`play_rows`) are worked out again only
     after something changed them (`stale`); after a body was put somewhere by the plant, the next
-    read takes every body (`full_read`).
+    read takes every body (`full_read`). A body in free transport (transport.py) is not read
+    either: the hub moves its row itself.
     """
 
     def __init__(self, client: int, rest):
@@ -42,7 +43,11 @@ class Bodies:
         self.live_rows = None         # rows read per tick: in play and awake (None: every body)
         self.live_ids: list[int] = []
         self.play_rows = None         # rows in play, not parked (None: every body)
+        self.moved_rows = None        # rows whose state changes per tick: read or in free transport (None: every body)
+        self.free = None              # per body: in free transport, moved by the hub (transport.py), not read
         self.under = None             # the field under each live row at the last read (−1: none)
+        self.moved_under = None       # the same for each of moved_rows
+        self._live_in_moved = None    # which of moved_rows are live (None: all)
         # The rows the last read took that are in play, as one (n, 13) block, and which rows they
         # are (None: every body): what the watch tests, without indexing the state again.
         self.fresh = np.zeros((0, 13))
@@ -81,6 +86,9 @@ class Bodies:
         rows = None if self.full_read else self.live_rows
         self.full_read = False
         bodies = self.ids if rows is None else self.live_ids
+        free = None if rows is not None or self.free is None or not self.free.any() else np.flatnonzero(self.free)
+        if free is not None:
+            kept = self._state[free].copy()   # a full read takes the engine's stale pose of a free body: not that
         if bodies:
             client, n = self._client, len(bodies)
             pose, velocity, flat = pybullet.getBasePositionAndOrientation, pybullet.getBaseVelocity, chain.from_iterable
@@ -90,6 +98,8 @@ class Bodies:
                 self._state = state = read.reshape(n, 13)
                 self.positions, self.orientations = state[:, :3], state[:, 3:7]
                 self.velocities, self.angular_velocities = state[:, 7:10], state[:, 10:]
+                if free is not None:
+                    state[free] = kept
                 # A full read (rare: the first, or after a park) takes parked bodies too; off stage, not in play.
                 play = self.play_rows
                 self.fresh, self.fresh_rows = (state, None) if play is None else (state[play], play)
@@ -98,24 +108,29 @@ class Bodies:
                 self.fresh_rows = rows
         else:
             self.fresh, self.fresh_rows = np.zeros((0, 13)), None
-        self.under = self.fields_under(fields, self.live_rows)
+        # The field under every body that moves, once; the live rows' part of it for the rest rule.
+        self.moved_under = self.fields_under(fields, self.moved_rows)
+        self.under = self.moved_under if self._live_in_moved is None else self.moved_under[self._live_in_moved]
 
     def refresh(self) -> None:
         """Work out the bodies in play and those read per tick after a park, unpark, rest or wake."""
         play = np.ones(len(self.ids), bool)
         play[list(self.parked)] = False
-        live = play & ~self._rest.resting
+        moved = play & ~self._rest.resting
+        live = moved if self.free is None else moved & ~self.free
         self.play_rows = None if play.all() else np.flatnonzero(play)
+        self.moved_rows = None if moved.all() else np.flatnonzero(moved)
         self.live_rows = None if live.all() else np.flatnonzero(live)
+        self._live_in_moved = None if self.free is None or not self.free.any() else ~self.free[moved]
         self.live_ids = [] if self.live_rows is None else [self.ids[n] for n in self.live_rows.tolist()]
         self.stale = False
-        self.under = None
+        self.under = self.moved_under = None
 
     def moved(self) -> None:
         """A body was put somewhere by the plant (parked, unparked): read every body next tick."""
         self.full_read = True
         self.stale = True
-        self.under = None
+        self.under = self.moved_under = None
 
     def fields_under(self, fields, rows) -> np.ndarray:
         return fields.which(self.positions if rows is None else self.positions[rows])

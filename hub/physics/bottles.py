@@ -5,11 +5,13 @@ import numpy as np
 
 from hub.physics._quiet import quiet_stderr
 from hub.physics.frames import base_points
+from hub.physics.transport import LOOKAHEAD
 
 with quiet_stderr():
     import pybullet
 
 GRIPS = ("centre", "base", "base_body")
+TRANSPORTS = ("exact", "engine")
 
 
 class Bottles:
@@ -17,10 +19,11 @@ class Bottles:
     belts' forces to them where each is gripped: at its centre of mass, at its base point, or
     on the paper's second body at its base (`grip_at`)."""
 
-    def __init__(self, engine, bodies, rest):
+    def __init__(self, engine, bodies, rest, transport):
         self.engine = engine
         self.bodies = bodies
         self.rest = rest
+        self.transport = transport
         self.base_offsets: dict[int, float] = {}   # bottle → COM height above its base (grip at base)
         self.base_bodies: dict[int, int] = {}      # bottle → its second body (the paper's model)
         self._grips = None
@@ -37,10 +40,12 @@ class Bottles:
              linearDamping=0.0, angularDamping=0.0)
         index = self.bodies.add(body, label, mass, radius, height / 2.0)
         self.rest.add(False, radius, height / 2.0)   # a one-link multibody: Bullet's sleeping differs there
+        self.transport.add(False)
         return index
 
     def add(self, base, radius: float, height: float, mass: float, label: str, *, hull=None,
-            grip_at: str = "centre", base_fraction: float = 0.05, ring: float, maximal: bool) -> int:
+            grip_at: str = "centre", base_fraction: float = 0.05, ring: float, maximal: bool,
+            transport: str = "engine", lookahead: int = LOOKAHEAD) -> int:
         """An upright bottle standing on `base` (the centre of its bottom face).
 
         Collision shape: the cylinder's body `ring` narrower than `radius`, with its widest ring
@@ -52,7 +57,12 @@ class Bottles:
         the bottom), or `base_body` (the paper's model: a second body of `base_fraction` of the
         mass at the base, under a fixed constraint, takes the force). `maximal`: a rigid body in
         maximal coordinates rather than a one-link multibody (PhysicsWorld says why).
+        `transport`: `exact` lets a plain rigid bottle (no hull, no second body) leave the engine
+        while it rides a belt on which nothing can touch it, looking `lookahead` ticks forward
+        (transport.py); `engine` keeps it in the engine throughout.
         """
+        if transport not in TRANSPORTS:
+            raise ValueError(f"transport must be exact or engine, not {transport!r}")
         self.bodies.check_open()
         if grip_at not in GRIPS:
             raise ValueError(f"grip_at must be centre, base or base_body, not {grip_at!r}")
@@ -93,8 +103,10 @@ class Bottles:
             call(pybullet.changeConstraint, joint, maxForce=1e4)
             self.base_bodies[index] = second
         self.bodies.add(body, label, mass, radius, half)
-        # Rests only as a plain rigid body whose box rest.boxes knows (no hull, no second body).
-        self.rest.add(maximal and hull is None and grip_at != "base_body", radius, half)
+        # Rests, and rides free, only as a plain rigid body whose box rest.boxes knows (no hull, no second body).
+        plain = maximal and hull is None and grip_at != "base_body"
+        self.rest.add(plain, radius, half)
+        self.transport.add(plain and transport == "exact", lookahead)
         return index
 
     def parts(self, body: int):
@@ -105,7 +117,8 @@ class Bottles:
             yield self.base_bodies[body], -float(self.bodies.half_heights[body])
 
     def drive(self, fields) -> None:
-        """Apply every belt's force for this tick where it grips each bottle on a belt.
+        """Apply every belt's force for this tick where it grips each bottle on a belt, and hand
+        the bottles in free transport their velocity change by the same law (transport.py).
 
         A bottle is on a belt when its centre of mass is over it; only then is its grip point
         worked out (its base, or its second body's state read), so a bottle off every belt
@@ -114,14 +127,15 @@ class Bottles:
         b = self.bodies
         if b.stale:
             b.refresh()
-        rows = b.live_rows           # parked and resting bodies are not even looked for
-        field = b.under if b.under is not None else b.fields_under(fields, rows)
+        rows = b.moved_rows          # parked and resting bodies are not even looked for
+        field = b.moved_under if b.moved_under is not None else b.fields_under(fields, rows)
         if rows is None:
             bodies = np.flatnonzero(field >= 0)
             f = field[bodies]
         else:
             on = field >= 0
             bodies, f = rows[on], field[on]
+        transport = self.transport
         if len(bodies) == 0:
             return
         if self._grips is None:
@@ -146,12 +160,23 @@ class Bottles:
                     # The paper's model: the field sees the second body's own position and velocity.
                     points[row] = pybullet.getBasePositionAndOrientation(second, client)[0]
                     velocities[row] = pybullet.getBaseVelocity(second, client)[0]
-        forces = fields.forces_at(f, points, velocities, b.masses[bodies])
+        dvx, dvy = fields.changes_at(f, points, velocities, b.masses[bodies])
+        if transport.enabled:
+            transport.pull[bodies] = np.hypot(dvx, dvy)   # what its look at fixed geometry allows for
+        if len(transport.rows):
+            free = transport.free[bodies]
+            if free.any():
+                transport.hand(bodies[free], f[free], dvx[free], dvy[free])
+                engine = ~free
+                bodies, f, points = bodies[engine], f[engine], points[engine]
+                dvx, dvy = dvx[engine], dvy[engine]
+        per_second = b.masses[bodies] / fields.dt
+        fx, fy = (dvx * per_second).tolist(), (dvy * per_second).tolist()
         # A world-frame force acts at `at`: the centre of mass adds no torque, the base does.
         # Positional arguments: keywords cost pybullet's argument parser a tenth of the call.
         apply, frame = pybullet.applyExternalForce, pybullet.WORLD_FRAME
-        for target, force, at in zip(targets[bodies].tolist(), forces.tolist(), points.tolist()):
-            apply(target, -1, force, at, frame, client)
+        for target, x, y, at in zip(targets[bodies].tolist(), fx, fy, points.tolist()):
+            apply(target, -1, (x, y, 0.0), at, frame, client)
         # The surface also grips the base against spinning; only bottles that spin get a call.
         torques = fields.spin_torques(f, b.angular_velocities[bodies, 2], b.masses[bodies], b.radii[bodies])
         spinning = np.flatnonzero(torques)

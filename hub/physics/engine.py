@@ -32,6 +32,7 @@ class Engine:
         # Every fixed box made here, (body, centre, half extents, yaw) in the world frame: the
         # world's box and the placement check at load read them (watch.py, placement.py).
         self.static: list[tuple[int, tuple, tuple, float]] = []
+        self.floors: set[int] = set()   # the bodies of the merged floors among them
 
     @property
     def solver_iterations(self) -> int:
@@ -88,6 +89,7 @@ class Engine:
         for area in supports.merge(self._supports):
             center, half = supports.box(area)
             self.add_static_box(center, half)
+            self.floors.add(self.static[-1][0])
         self._supports = []
 
     def static_bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -118,6 +120,17 @@ class Engine:
         """Wake a body and keep Bullet's own sleeping rule off it (it would stop a bottle riding a belt)."""
         self.call(pybullet.changeDynamics, body, -1, activationState=pybullet.ACTIVATION_STATE_WAKE_UP)
         self.call(pybullet.changeDynamics, body, -1, activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING)
+
+    def leave(self, body: int) -> None:
+        """Take a dynamic body out of the collision world and put it to sleep: the engine keeps
+        no pair, contact or island for it (a bottle in free transport)."""
+        self.call(pybullet.setCollisionFilterGroupMask, body, -1, 0, 0)
+        self.sleep(body)
+
+    def rejoin(self, body: int) -> None:
+        """Put a body that left back into the collision world, awake (pybullet's group and mask for a dynamic body)."""
+        self.call(pybullet.setCollisionFilterGroupMask, body, -1, 1, -1)
+        self.wake(body)
 
     def aabb(self, body: int, link: int = -1) -> tuple[tuple, tuple]:
         """The box (lo, hi) the engine bounds a body (or one of its links) by, without its pair-search widening."""

@@ -70,6 +70,7 @@ class ForceFields:
         self.surface = np.zeros(0, bool)
         self.speeds = np.zeros(0)
         self.limits = np.zeros(0)      # most acceleration friction can give, m/s² (inf: none)
+        self.surfaces = np.zeros(0)    # height of the belt's surface, m (its centre line's)
         self.limited = False           # some field has a finite limit
 
     def __len__(self) -> int:
@@ -96,6 +97,7 @@ class ForceFields:
         self.surface = np.append(self.surface, grip == "surface")
         self.speeds = np.append(self.speeds, float(speed))
         self.limits = np.append(self.limits, float(limit))
+        self.surfaces = np.append(self.surfaces, float(line.start.z))
         self.limited = bool(np.isfinite(self.limits).any())
         return index
 
@@ -138,13 +140,26 @@ class ForceFields:
 
     def forces_at(self, f: np.ndarray, points: np.ndarray, velocities: np.ndarray, masses: np.ndarray) -> np.ndarray:
         """Forces (M,3) on M bodies driven by the fields `f`, each gripped at `points` moving at
-        `velocities` (the centre of mass, or the base for a bottle that rocks).
+        `velocities` (the centre of mass, or the base for a bottle that rocks): the velocity
+        change of `changes_at` over one tick, times the mass."""
+        if len(f) == 0:
+            return np.zeros((0, 3))
+        dvx, dvy = self.changes_at(f, points, velocities, masses)
+        forces = np.zeros((len(f), 3))
+        per_second = masses / self.dt
+        forces[:, 0] = dvx * per_second
+        forces[:, 1] = dvy * per_second
+        return forces
+
+    def changes_at(self, f: np.ndarray, points: np.ndarray, velocities: np.ndarray,
+                   masses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The horizontal velocity changes (dvx, dvy), each (M,), that the law gives M bodies in
+        one tick: what the engine adds to a driven body's velocity, and what free transport
+        (transport.py) adds itself.
 
         Written component by component on (M,) arrays: this runs at every tick for every bottle
         on a belt, and for a hundred bottles numpy's per-call overhead, not the arithmetic, is
         the cost (half the time of the same law on (M,2) arrays with stacks and einsum)."""
-        if len(f) == 0:
-            return np.zeros((0, 3))
         dt, lines = self.dt, self.lines
         px, py = points[:, 0], points[:, 1]
         vx, vy = velocities[:, 0], velocities[:, 1]
@@ -191,11 +206,7 @@ class ForceFields:
             size = np.hypot(dvx, dvy)
             scale = np.minimum(1.0, self.limits[f] * dt / np.maximum(size, 1e-300))
             dvx, dvy = dvx * scale, dvy * scale
-        forces = np.zeros((len(f), 3))
-        per_second = masses / dt
-        forces[:, 0] = dvx * per_second
-        forces[:, 1] = dvy * per_second
-        return forces
+        return dvx, dvy
 
     def _keep(self, rate: np.ndarray) -> np.ndarray:
         """What is left of a velocity error after one tick at `rate` (1/s): e^(−k·dt) exactly, or

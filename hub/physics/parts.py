@@ -19,12 +19,14 @@ class SwitchableParts:
         self._boxes: list[tuple] = []   # each part's bounding box (lo, hi), for waking what rests in it
         self._thinnest: list[tuple] = []   # each part's thinnest box: (its centre, half its thickness), m
         self.solid: list[bool] = []     # each part's collision now (a view draws it so)
+        self.boxes: list[tuple] = []    # every box of every part: (centre, half extents, yaw), world frame
 
     def add(self, centers, half_extents, yaws, solid: bool) -> int:
         """One fixed body of boxes placed in the world frame; returns its number for `set_solid`."""
         body = self.engine.boxes_body(centers, half_extents, yaws)
         self.engine.frictionless(body)
         self._bodies.append(body)
+        self.boxes.extend((tuple(c), tuple(h), float(y)) for c, h, y in zip(centers, half_extents, yaws))
         self._boxes.append(self.engine.aabb(body))
         halves = np.asarray(half_extents, float).reshape(-1, 3)[:, :2].min(1)
         thin = int(np.argmin(halves))

@@ -22,6 +22,7 @@ from hub.physics.rest import Rest
 from hub.physics.robot import REACH, SHOULDER, URDF, KinematicArm
 from hub.physics.scene import SceneLog, SceneState, scene_state
 from hub.physics.sleep import Sleep
+from hub.physics.transport import LOOKAHEAD, FreeTransport
 from hub.physics.triggers import Latch, VolumeTriggers
 from hub.physics.watch import Watch
 
@@ -48,6 +49,7 @@ class PhysicsWorld:
     | `parking` | parking.py | bodies out of play, off stage |
     | `robots` | arms.py, robot.py | robot arms, gripped bodies and the triggers on their tools |
     | `rest`, `sleep` | rest.py, sleep.py | bodies at rest: the rule (numpy) and the engine's side |
+    | `transport` | transport.py | bottles in free transport, moved by their belt's law outside the engine |
     | `watch` | watch.py, placement.py | a run gone wrong: bodies too fast, non-finite or out of the box; overlaps at load |
     | `scene` | scene.py | what was built and by which object, and the moving state, for a view |
 
@@ -100,8 +102,10 @@ class PhysicsWorld:
         self.anchors: dict[str, Pose] = {}      # named belt ends, where a belt given `after:` starts
         self.rest = Rest(rate, sleep_after)     # bodies the engine leaves asleep (rest.py)
         self.check_rest = False                 # compare resting bodies with the engine at every tick (tests)
+        self.check_free = False                 # ask the engine whether a free bottle touches anything, every tick (tests)
         self.bodies = Bodies(self._client, self.rest)
-        self.bottles = Bottles(self.engine, self.bodies, self.rest)
+        self.transport = FreeTransport(self.engine, self.bodies, self.fields, self.dt)
+        self.bottles = Bottles(self.engine, self.bodies, self.rest, self.transport)
         self.sleep = Sleep(self.engine, self.bodies, self.rest)
         self.parts = SwitchableParts(self.engine, self.sleep)
         self.moving = MovingParts(self.engine, rate, self.sleep)
@@ -196,6 +200,8 @@ class PhysicsWorld:
         if speed != self.fields.speeds[field] and self.rest.resting.any():
             self.sleep.wake(self.rest.on_field(field, self.bodies.positions))
         self.watch.belt_speed(speed)
+        if speed != self.fields.speeds[field]:
+            self.transport.speed_changed()
         self.fields.set_speed(field, speed)
 
     def add_cylinder(self, base, radius: float, height: float, mass: float, label: str) -> int:
@@ -204,10 +210,13 @@ class PhysicsWorld:
         return row
 
     def add_bottle(self, base, radius: float, height: float, mass: float, label: str, *, hull=None,
-                   grip_at: str = "centre", base_fraction: float = 0.05) -> int:
-        """An upright bottle standing on `base` (bottles.py; RING and MAXIMAL above)."""
+                   grip_at: str = "centre", base_fraction: float = 0.05, transport: str = "engine",
+                   lookahead: int = LOOKAHEAD) -> int:
+        """An upright bottle standing on `base` (bottles.py; RING and MAXIMAL above); `transport`
+        and `lookahead` (ticks): whether and how it may ride free (transport.py)."""
         row = self.bottles.add(base, radius, height, mass, label, hull=hull, grip_at=grip_at,
-                               base_fraction=base_fraction, ring=self.RING, maximal=self.MAXIMAL)
+                               base_fraction=base_fraction, ring=self.RING, maximal=self.MAXIMAL,
+                               transport=transport, lookahead=lookahead)
         self.scene.body(row)
         return row
 
@@ -236,6 +245,7 @@ class PhysicsWorld:
         return part
 
     def park(self, body: int) -> None:
+        self.transport.forget(body)
         self.parking.park(body)
 
     def unpark(self, body: int, base) -> None:
@@ -253,6 +263,7 @@ class PhysicsWorld:
         self.robots.follow(trigger, arm, offset)
 
     def grip(self, arm: KinematicArm, body: int) -> None:
+        self.transport.release([body])
         self.robots.grip(arm, body)
 
     def release(self, arm: KinematicArm) -> None:
@@ -279,9 +290,21 @@ class PhysicsWorld:
         if not b.started:
             b.started = True
             self.engine.build_supports()
+            if self.transport.enabled:
+                self.transport.arm(self._fixed_boxes(), self._arm_spheres(), self.moving)
             b.read(self.fields)
             self.check_start()
             self.triggers.evaluate(self.tick, b.positions, b.radii, b.half_heights)
+
+    def _fixed_boxes(self) -> list[tuple]:
+        """Every fixed box but the floors, and every box of a gate or blade whether solid or not:
+        what a free bottle keeps clear of (transport.py)."""
+        floors = self.engine.floors
+        return [(c, h, y) for body, c, h, y in self.engine.static if body not in floors] + self.parts.boxes
+
+    def _arm_spheres(self) -> list[tuple]:
+        """Where each robot arm can reach (centre, radius): no bottle rides free there."""
+        return [(arm.base + SHOULDER, REACH + arm.tool_length) for arm in self.robots.arms]
 
     def check_start(self) -> None:
         """Before the first tick: bodies placed overlapping are an error (the engine would eject
@@ -296,7 +319,7 @@ class PhysicsWorld:
         fastest = float(np.abs(self.fields.speeds).max()) if len(self.fields.speeds) else 0.0
         lo, hi = self.engine.static_bounds()
         # An arm carries a bottle anywhere within its reach, and may let go of it there.
-        reach = [(arm.base + SHOULDER, REACH + arm.tool_length) for arm in self.robots.arms]
+        reach = self._arm_spheres()
         lo = np.vstack([lo] + [c - r for c, r in reach])
         hi = np.vstack([hi] + [c + r for c, r in reach])
         play = b.in_play_rows()
@@ -312,16 +335,22 @@ class PhysicsWorld:
     def step(self, substeps: int, stop_on_event: bool = False) -> int:
         """Advance up to `substeps` ticks: force fields applied and triggers evaluated at every tick.
 
-        One tick: wake what awake bodies and moving parts come near (rest.py's rule), apply the
-        belts' forces, let the engine step, put arms and moving parts where they are at the new
-        tick, read the bodies' state, evaluate the triggers, and let still bodies rest. With
+        One tick: bring back into the engine the free bottles something could touch, wake what
+        awake bodies and moving parts come near (rest.py's rule), apply the belts' forces, let the
+        engine step, move the free bottles (transport.py), put arms and moving parts where they
+        are at the new tick, read the bodies' state, evaluate the triggers, let still bodies
+        rest and steady ones on a belt ride free. With
         `stop_on_event`, stop after the first tick at which a trigger saw an object enter or
         leave. Returns the number of ticks advanced.
         """
         self.start()
         step, client, triggers, rest = pybullet.stepSimulation, self._client, self.triggers, self.rest
         b, sleep, moving, arms, watch = self.bodies, self.sleep, self.moving, self.robots, self.watch
+        transport = self.transport
+        free = transport.enabled
         for done in range(1, substeps + 1):
+            if free and len(transport.rows):
+                transport.release_near(self.tick, b.placed, moving.moving)
             if rest.resting.any():
                 sleep.wake_near()
                 if moving.moving:
@@ -329,6 +358,8 @@ class PhysicsWorld:
             self.bottles.drive(self.fields)
             step(client)
             self.tick += 1
+            if free:
+                transport.advance()
             if arms.arms:
                 arms.move(self.tick)
             if moving.parts:
@@ -339,12 +370,17 @@ class PhysicsWorld:
                 bad = watch.check(b.fresh, b.fresh_rows)
                 if bad is not None:
                     self._violation(bad)
-            moved = None if full or b.full_read else b.live_rows   # full_read again: the watch took a body out
+            moved = None if full or b.full_read else b.moved_rows   # full_read again: the watch took a body out
             event = triggers.evaluate(self.tick, b.positions, b.radii, b.half_heights, b.play_rows, moved)
             if self.check_rest:
                 sleep.check(self.tick)
-            if rest.enabled and self.tick % rest.every == 0:
-                sleep.settle(self.fields, arms.held_rows(), moving)
+            if self.check_free:
+                transport.check(self.tick, self.engine.floors)
+            if self.tick % rest.every == 0:
+                if rest.enabled:
+                    sleep.settle(self.fields, arms.held_rows(), moving)
+                if free:
+                    transport.take_free(b.awake_rows(), arms.held_rows())
             if event and stop_on_event:
                 return done
         return substeps

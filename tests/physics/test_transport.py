@@ -1,0 +1,126 @@
+"""Free transport (hub/physics/transport.py): a bottle riding a belt with nothing in reach leaves
+the engine and follows the belt's law in numpy, and comes back before anything can touch it.
+Every run here asks the engine at every tick whether a free bottle touches anything
+(check_free), as check_rest does for resting ones."""
+
+import numpy as np
+import pytest
+
+from hub.core.errors import ScenarioError
+from hub.physics import PhysicsWorld
+from hub.physics.frames import Pose, Straight
+from hub.run.assembly import Run
+from hub.scenario.checker import load_scenario
+
+from ..helpers import ROOT
+
+SCENARIOS = ROOT / "scenarios"
+
+
+def crossing(transport: str) -> tuple[int, bool, np.ndarray]:
+    """belt_bottle_sensor.yaml: the tick the bottle enters the light barrier, whether it was free
+    then, and its state at the end (position, velocity)."""
+    scenario = load_scenario(SCENARIOS / "belt_bottle_sensor.yaml", {"objects.bottle.transport": transport})
+    with Run(scenario) as run:
+        run.start()
+        world = run.plant.world
+        world.check_free = True
+        entered, free = None, False
+        while world.tick < 450:
+            world.step(1)
+            if entered is None and world.triggers.occupied()[0]:
+                entered, free = world.tick, bool(world.transport.free[0])
+        return entered, free, np.concatenate([world.positions[0], world.velocities[0]])
+
+
+def test_a_free_bottle_crosses_the_light_barrier_at_the_tick_the_engine_driven_one_does():
+    engine_tick, was_free, engine_end = crossing("engine")
+    free_tick, is_free, free_end = crossing("exact")
+    assert not was_free and is_free              # the second crossed it in free transport
+    # Within one tick (the stated tolerance): the engine adds only its rocking and sink.
+    assert abs(free_tick - engine_tick) <= 1
+    assert free_tick == engine_tick              # and here exactly
+    assert np.abs(free_end[:2] - engine_end[:2]).max() < 1e-3          # m, after 3 s at 0.5 m/s
+    assert np.abs(free_end[3:5] - engine_end[3:5]).max() < 1e-3        # m/s
+
+
+@pytest.mark.parametrize("name, key, back", [
+    ("stopper_queue", "defaults.source.transport", True),   # a queue at a closed stopper, a sink
+    ("switch", "defaults.bottle.transport", True),          # a switch's blade
+    ("source_sink", "defaults.source.transport", False),    # put down by a source, taken by sinks while free
+    ("pusher", "defaults.bottle.transport", True),          # a pusher's plate
+])
+def test_free_bottles_come_back_before_anything_touches_them(name, key, back):
+    """…and the scene ends as it does with the engine moving every bottle: the same bottles
+    taken by the same sinks, the others within 1 cm of where they stand then."""
+    ends = {}
+    for transport in ("engine", "exact"):
+        scenario = load_scenario(SCENARIOS / f"{name}.yaml", {key: transport})
+        with Run(scenario) as run:
+            run.start()
+            world = run.plant.world
+            world.check_free = world.check_rest = True   # the engine's word at every tick
+            run.run()
+            on_stage = world.bodies.in_play_rows()
+            ends[transport] = (sorted(world.bodies.parked), world.positions[on_stage].copy(), world.transport.entered,
+                               world.transport.left)
+    (parked, stand, _, _), (free_parked, free_stand, entered, left) = ends["engine"], ends["exact"]
+    assert entered > 0 and (left > 0) == back
+    assert free_parked == parked
+    assert np.abs(free_stand - stand).max(initial=0.0) < 0.01
+
+
+def belts_world(fast: float, slow: float, k_slow: float = 16.0) -> PhysicsWorld:
+    """A fast belt (x ∈ [0, 1)) handing over to a slow one (x ∈ [1, 3), rate `k_slow`), floors
+    merged, rails either side 5 cm from the centre line."""
+    world = PhysicsWorld(150)
+    world.check_free = world.check_rest = True
+    world.add_support(0.0, (0.0, -0.07, 3.0, 0.07))
+    for x0, length, speed, k in ((0.0, 1.0, fast, 16.0), (1.0, 2.0, slow, k_slow)):
+        world.add_belt_field(Straight(Pose(x0, 0.0, 0.0, 0.0), length), 0.05, -0.02, 0.1, k, speed)
+    for side in (1, -1):
+        world.add_static_box((1.5, side * 0.06, 0.04), (1.5, 0.01, 0.04))
+    return world
+
+
+def test_a_free_bottle_comes_back_before_it_catches_up_with_another_free_one():
+    # The slow belt grips weakly (k = 2/s): the one behind comes onto it at 0.5 m/s and slows
+    # over ~20 cm, catching up with the one ahead, which rides at 0.1 m/s.
+    with belts_world(0.5, 0.1, k_slow=2.0) as world:
+        front = world.add_bottle((1.05, 0, 0), 0.03, 0.1, 0.05, "front", transport="exact")
+        back = world.add_bottle((0.3, 0, 0), 0.03, 0.1, 0.05, "back", transport="exact")
+        both_free = False
+        for _ in range(750):
+            world.step(1)
+            both_free |= bool(world.transport.free[[front, back]].all())
+        assert both_free                                  # they rode free together
+        assert not world.transport.free[back]             # and the one that caught up came back
+        gap = world.positions[front, 0] - world.positions[back, 0]
+        assert 0.058 < gap < 0.065                        # it rides behind the other, touching
+
+
+def test_free_transport_is_bit_identical_in_two_runs():
+    def run():
+        with belts_world(0.5, 0.2) as world:
+            for k in range(6):
+                world.add_bottle((0.05 + 0.15 * k, 0, 0), 0.03, 0.1, 0.05, f"b{k}", transport="exact")
+            states = []
+            for _ in range(40):
+                world.step(15)
+                states.append(np.concatenate([world.positions.ravel(), world.velocities.ravel()]))
+            return np.array(states), world.transport.entered
+    (a, entered), (b, _) = run(), run()
+    assert entered > 0
+    assert a.tobytes() == b.tobytes()
+
+
+def test_what_free_transport_cannot_move_is_refused_by_name(tmp_path):
+    path = tmp_path / "hull.yaml"
+    path.write_text("planthub: 1\nname: hull\nrun: {duration: 1.0}\nobjects:\n"
+                    "  b: {module: bottle, position: [0, 0, 0], shape: hull, transport: exact}\n")
+    with pytest.raises(ScenarioError, match=r"objects\.b\.transport.*free transport moves a plain rigid bottle only"):
+        load_scenario(path)
+    with PhysicsWorld(150) as world, pytest.raises(ValueError, match="transport must be exact or engine, not 'free'"):
+        world.add_bottle((0, 0, 0), 0.03, 0.1, 0.05, "b", transport="free")
+    with PhysicsWorld(150) as world, pytest.raises(ValueError, match="look-ahead must be a whole number of ticks, at least 2"):
+        world.add_bottle((0, 0, 0), 0.03, 0.1, 0.05, "b", transport="exact", lookahead=1)
