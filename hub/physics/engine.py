@@ -121,9 +121,15 @@ class Engine:
         self.call(pybullet.changeDynamics, body, -1, activationState=pybullet.ACTIVATION_STATE_WAKE_UP)
         self.call(pybullet.changeDynamics, body, -1, activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING)
 
+    def fixed_bodies(self) -> set[int]:
+        """The fixed bodies made here (floors, rails)."""
+        return {body for body, _, _, _ in self.static}
+
     def leave(self, body: int) -> None:
         """Take a dynamic body out of the collision world and put it to sleep: the engine keeps
-        no pair, contact or island for it (a bottle in free transport)."""
+        no pair, contact or island for it (a resting bottle, one in free transport). With the
+        ~70 resting bottles of the bottling plant's busiest window out, the engine's step takes
+        398–457 µs instead of 737–1048 (README)."""
         self.call(pybullet.setCollisionFilterGroupMask, body, -1, 0, 0)
         self.sleep(body)
 

@@ -50,6 +50,10 @@ class SwitchableParts:
                            "pass through it between two ticks; make it thicker or the physics rate higher")
         return out
 
+    def bodies(self) -> set[int]:
+        """The parts' fixed bodies."""
+        return set(self._bodies)
+
     def set_solid(self, part: int, solid: bool) -> None:
         """Collision on or off through the body's filter group and mask: one call whatever the
         number of bottles (setCollisionFilterPair needs one per bottle), 0.8 µs, in effect from

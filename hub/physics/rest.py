@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
+HELD_AFTER = 0.3       # s a bottle held still on a running belt stands before it rests (see Rest.candidates)
 BREAKING = 0.02        # m: Bullet widens every box by its contact breaking threshold before the pair search
 SHAPE_MARGIN = 0.002   # m: for the shapes' collision margins (the boxes hold the engine's within 3 mm, tested)
 
@@ -96,11 +97,13 @@ class Rest:
 
     def __init__(self, rate: int, after: float = 0.05, speed: float = 0.005, spin: float = 0.05):
         self.ticks = max(1, round(after * rate)) if after > 0 else 0   # 0: nothing ever rests
+        self.held_ticks = max(self.ticks, round(HELD_AFTER * rate))     # still this long when held on a running belt
         self.retry = max(1, round(0.1 * rate))   # ticks between two tries of a still body left awake (0.1 s)
         self.every = max(1, min(3, self.ticks))    # ticks between two looks for still bodies
         self.dt = 1.0 / rate
         self._speed2, self._spin2 = speed * speed, spin * spin
         self.allowed = np.zeros(0, bool)       # the body's kind may rest (a plain rigid bottle)
+        self.held = np.zeros(0, bool)          # it may rest held still against a running belt too
         self.radii = np.zeros(0)
         self.half_heights = np.zeros(0)
         self.still = np.zeros(0, int)          # ticks it has been still where nothing drives it
@@ -114,8 +117,9 @@ class Rest:
     def enabled(self) -> bool:
         return self.ticks > 0
 
-    def add(self, allowed: bool, radius: float, half_height: float) -> None:
+    def add(self, allowed: bool, radius: float, half_height: float, held: bool = True) -> None:
         self.allowed = np.append(self.allowed, allowed and self.enabled)
+        self.held = np.append(self.held, held)
         self.radii = np.append(self.radii, radius)
         self.half_heights = np.append(self.half_heights, half_height)
         self.still = np.append(self.still, 0)
@@ -147,19 +151,23 @@ class Rest:
     def _bounds(self, rows, velocities, spins) -> np.ndarray:
         return bounds(self.radii[rows], self.half_heights[rows], velocities[rows], spins[rows], self.dt)
 
-    def candidates(self, rows: np.ndarray, velocities: np.ndarray, spins: np.ndarray, undriven: np.ndarray) -> np.ndarray:
-        """A look at the awake `rows` (`undriven`: nothing drives them), one every `every`
-        ticks: a body still at this look counts `every` more still ticks, one that moves starts
-        from zero. The rows that have now been still long enough to rest."""
+    def candidates(self, rows: np.ndarray, velocities: np.ndarray, spins: np.ndarray, undriven: np.ndarray,
+                   held: np.ndarray | None = None) -> np.ndarray:
+        """A look at the awake `rows` (`undriven`: nothing drives them; `held`: a running belt
+        does, and they stand still against it), one every `every` ticks: a body still at this
+        look counts `every` more still ticks, one that moves starts from zero. The rows that
+        have now been still long enough to rest: `after`, or `held_after` when held."""
         v, w = velocities[rows], spins[rows]
-        still = (undriven & self.allowed[rows]
+        may = undriven if held is None else undriven | (held & self.held[rows])
+        still = (may & self.allowed[rows]
                  & ((v * v).sum(axis=1) < self._speed2) & ((w * w).sum(axis=1) < self._spin2))
         counts = np.where(still, self.still[rows] + self.every, 0)
         self.still[rows] = counts
-        due = counts >= self.ticks
+        need = self.ticks if held is None else np.where(undriven, self.ticks, self.held_ticks)
+        due = counts >= need
         # All that are due go together (a queue whose bottles came to rest a tick apart rests as
         # one group), when one has just become due or one left awake is due to try again.
-        over = counts[due] - self.ticks
+        over = counts[due] - (need if np.isscalar(need) else need[due])
         if not (over % self.retry < self.every).any():
             return rows[:0]
         return rows[due]

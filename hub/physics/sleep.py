@@ -30,12 +30,18 @@ class Sleep:
             return
         field = b.under
         undriven = field < 0
+        pressed = None
         if len(fields):
-            undriven |= fields.speeds[field] == 0.0
+            standing = fields.speeds[field] == 0.0
+            pressed = ~undriven & ~standing      # on a running belt: rests only if held still against it
+            undriven |= standing
         if held:
-            undriven &= ~np.isin(rows, held)
+            gripped = np.isin(rows, held)
+            undriven &= ~gripped
+            if pressed is not None:
+                pressed &= ~gripped
         state = b.positions, b.orientations, b.velocities, b.angular_velocities
-        candidates = rest.candidates(rows, state[2], state[3], undriven)
+        candidates = rest.candidates(rows, state[2], state[3], undriven, pressed)
         if len(candidates):
             candidates = rest.settle(candidates, rows, *state)
         if len(candidates) and moving.moving:
@@ -45,7 +51,7 @@ class Sleep:
             candidates = candidates[clear]
         if len(candidates):
             for body in (b.ids[n] for n in candidates.tolist()):
-                self.engine.sleep(body)
+                self.engine.leave(body)
             rest.put(candidates, b.orientations, field[np.searchsorted(rows, candidates)])
             # What the engine holds for a sleeping body from its next tick on.
             b.velocities[candidates] = 0.0
@@ -73,14 +79,27 @@ class Sleep:
             return
         ids = self.bodies.ids
         for body in (ids[n] for n in rows.tolist()):
-            self.engine.wake(body)
+            self.engine.rejoin(body)
         self.rest.wake(rows)
         self.bodies.stale = True
 
-    def check(self, tick: int) -> None:
-        """Every resting body as the engine holds it: where planthub left it, not moving."""
+    def check(self, tick: int, parts: set[int]) -> None:
+        """Every resting body as the engine holds it: where planthub left it, not moving — and,
+        since it is out of the collision world (Engine.leave), touched by no awake body or moving
+        part, which would pass through it unseen (asked of the engine: closest points at 0; a
+        bottle may rest against fixed bodies and switchable `parts`, which wake it when they turn)."""
         b, client = self.bodies, self.engine.client
-        for n in self.rest.rows().tolist():
+        resting = self.rest.rows().tolist()
+        still = {b.ids[n] for n in resting} | self.engine.fixed_bodies() | parts
+        for n in resting:
+            lo, hi = self.engine.aabb(b.ids[n])
+            for other, _ in pybullet.getOverlappingObjects(lo, hi, physicsClientId=client) or ():
+                if other in still:
+                    continue
+                if pybullet.getClosestPoints(b.ids[n], other, 0.0, physicsClientId=client):
+                    raise RuntimeError(f"tick {tick}: {b.labels[n]} rests in planthub but body {other} "
+                                       "touches it: the wake came too late")
+        for n in resting:
             position, orientation = pybullet.getBasePositionAndOrientation(b.ids[n], client)
             velocity, spin = pybullet.getBaseVelocity(b.ids[n], client)
             if (tuple(b.positions[n]) != position or tuple(b.orientations[n]) != orientation

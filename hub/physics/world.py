@@ -373,7 +373,7 @@ class PhysicsWorld:
             moved = None if full or b.full_read else b.moved_rows   # full_read again: the watch took a body out
             event = triggers.evaluate(self.tick, b.positions, b.radii, b.half_heights, b.play_rows, moved)
             if self.check_rest:
-                sleep.check(self.tick)
+                sleep.check(self.tick, self.parts.bodies())
             if self.check_free:
                 transport.check(self.tick, self.engine.floors)
             if self.tick % rest.every == 0:

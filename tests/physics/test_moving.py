@@ -49,7 +49,10 @@ def test_the_plate_pushes_a_bottle_at_its_own_speed_without_sinking_into_it():
         world.step(60)
         assert not plate.moving and plate.offset == 0.12
         assert 0.5 <= world.velocities[bottle, 1] < 0.5 * 1.2          # left the plate with that speed
-        assert np.degrees(world.tilt(bottle)) < 1.0
+        # It rocks on the frictionless floor after the push (up to 4°, and a bottle that tips
+        # over passes 10° within these 60 ticks). Woken from rest it rejoined the collision world
+        # with a new contact on the floor (Engine.rejoin): 2.0° at this tick, 0.6° when it had kept one.
+        assert np.degrees(world.tilt(bottle)) < 2.5
 
 
 def test_a_standing_plate_holds_against_a_bottle_pressed_on_it():
@@ -83,13 +86,13 @@ def test_a_moving_plate_wakes_the_bottle_resting_in_its_way_and_pushes_it():
 
 
 def test_without_the_wake_the_engine_moves_a_resting_bottle_and_the_check_names_it(monkeypatch):
-    """The proof that the wake matters: Bullet wakes the bottle when the awake plate joins its
-    island and pushes it, while the hub still holds it at rest."""
+    """The proof that the wake matters: a resting bottle is out of the collision world, so the
+    awake plate would pass through it while the hub still holds it at rest; the check names it."""
     from hub.physics.moving import MovingParts
     monkeypatch.setattr(MovingParts, "wake_near", lambda self: None)
     with floor_world() as world:
         resting_in_the_way(world)
-        with pytest.raises(RuntimeError, match="in_the_way rests in planthub but the engine moved it"):
+        with pytest.raises(RuntimeError, match=r"in_the_way rests in planthub but body \d+ touches it: the wake came too late"):
             world.step(40)
 
 

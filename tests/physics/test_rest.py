@@ -45,11 +45,23 @@ def test_nothing_rests_with_sleep_after_zero_or_on_a_running_belt():
         world.step(150)
         assert not world.rest.resting.any() and world._live_rows is None
     with world_with(belt_speed=0.5) as world:
-        # Held against a gate by a running belt: still, but driven.
-        world.add_switchable_boxes([(0.9, 0, 0.05)], [(0.01, 0.3, 0.05)], [0.0], solid=True)
-        bottle = world.add_bottle((0.8, 0, 0), 0.03, 0.1, 0.05, "held")
+        bottle = world.add_bottle((0.2, 0, 0), 0.03, 0.1, 0.05, "riding")
         world.step(300)
-        assert abs(world.velocities[bottle, 0]) < 1e-3 and not world.rest.resting[bottle]
+        assert not world.rest.resting[bottle] and world.velocities[bottle, 0] > 0.4
+
+
+def test_a_bottle_held_at_a_closed_gate_on_a_running_belt_rests_and_goes_when_it_opens():
+    with world_with(belt_speed=0.5) as world:
+        gate = world.add_switchable_boxes([(0.9, 0, 0.05)], [(0.01, 0.3, 0.05)], [0.0], solid=True)
+        bottle = world.add_bottle((0.8, 0, 0), 0.03, 0.1, 0.05, "held")
+        world.step(60)        # at the gate from tick 25, still (under 5 mm/s) from ~55: not yet
+        assert not world.rest.resting[bottle]
+        world.step(60)        # still for HELD_AFTER (0.3 s): rests
+        assert world.rest.resting[bottle] and abs(world.positions[bottle, 0] - (0.89 - 0.03)) < 0.001
+        world.set_solid(gate, False)
+        assert not world.rest.resting[bottle]          # woken as the gate opens
+        world.step(30)
+        assert world.velocities[bottle, 0] > 0.3       # and carried on
 
 
 def test_a_belt_that_starts_wakes_what_rests_on_it():
