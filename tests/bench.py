@@ -48,14 +48,16 @@ def floor_run(scenario):
     return go
 
 
-def line_scene(n: int, seconds: float = 10.0, barriers: int = 1):
+def line_scene(n: int, seconds: float = 10.0, barriers: int = 1, transport: str = "engine"):
     """`n` bottles 8 cm apart on one long belt at 0.5 m/s (150 Hz), `barriers` light barriers
-    10 cm apart past them (each watched by the recording, so its trigger is evaluated)."""
+    10 cm apart past them (each watched by the recording, so its trigger is evaluated); each
+    bottle's `transport` (hub/physics/transport.py)."""
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "line.yaml"
         spacing = 0.08
         bottles = "\n".join(
-            f"  b{i}: {{module: bottle, position: [{0.04 + i * spacing:.3f}, 0, 0]}}" for i in range(n))
+            f"  b{i}: {{module: bottle, position: [{0.04 + i * spacing:.3f}, 0, 0], transport: {transport}}}"
+            for i in range(n))
         gates = "".join(f"  gate{g}: {{module: light_barrier, position: [{n * spacing + 1 + 0.1 * g:.2f}, 0, 0.05]}}\n"
                         for g in range(barriers))
         record = "".join(f"  - gate{g}.trigger.occupied\n" for g in range(barriers))

@@ -1,6 +1,7 @@
 """`make bench`, the bottling plant: cost per tick with 100 bottles on the line at 150 Hz, with
 the routing logic in the hub and over Zenoh, with bottles at rest left asleep (the default,
-hub/physics/rest.py) and without; and what leaving them asleep changes in the deliveries.
+hub/physics/rest.py) and without, and with free transport (hub/physics/transport.py); and what
+leaving them asleep, and letting them ride free, changes in the deliveries.
 
 From 100 s to 110 s of scenarios/bottling_plant.yaml about 100 bottles are on the line (95–101
 from 80 s to 125 s; most of them stand in the magazine's queue, which stops while a bottle waits
@@ -27,6 +28,7 @@ PLANT = ROOT / "scenarios" / "bottling_plant.yaml"
 WINDOW = (100.0, 110.0)
 REPEATS = 2
 COMPARED = 150.0    # s of the plant run with and without rest for the deliveries
+FREE = {"defaults.source.transport": "exact"}   # every bottle of the plant may ride free (transport.py)
 
 
 def on_line(world) -> int:
@@ -54,11 +56,12 @@ class EngineClock:
         pybullet.stepSimulation = self._step
 
 
-def window(in_process: bool, sleep_after: float | None) -> tuple[float, float, float, str, float]:
+def window(in_process: bool, sleep_after: float | None, more: dict | None = None) -> tuple[float, float, float, str, float]:
     """(hub s, of it the engine s, bare pybullet s, bottles on the line at the window's
     start–end, mean asleep). Bare: pybullet alone steps the same bodies as many ticks from
-    where the hub left them, every one awake (as in a world without rest)."""
-    overrides = {"objects.control.in_process": in_process}
+    where the hub left them, every one awake (as in a world without rest). `more`: further
+    overrides (free transport)."""
+    overrides = {"objects.control.in_process": in_process, **(more or {})}
     if sleep_after is not None:
         overrides["run.sleep_after"] = sleep_after
     scenario = load_scenario(PLANT, overrides)
@@ -86,9 +89,9 @@ def window(in_process: bool, sleep_after: float | None) -> tuple[float, float, f
     return hub, engine.seconds, bare, count, statistics.mean(resting)
 
 
-def deliveries(sleep_after: float | None) -> tuple[dict[str, tuple[str, float]], float]:
+def deliveries(sleep_after: float | None, more: dict | None = None) -> tuple[dict[str, tuple[str, float]], float]:
     """{bottle: (sink, time)} over the first COMPARED seconds, and the wall time."""
-    overrides = {"objects.control.in_process": True, "run.duration": COMPARED}
+    overrides = {"objects.control.in_process": True, "run.duration": COMPARED, **(more or {})}
     if sleep_after is not None:
         overrides["run.sleep_after"] = sleep_after
     scenario = load_scenario(PLANT, overrides)
@@ -110,11 +113,12 @@ def bottling_plant() -> None:
     print("|---|---|---:|---:|---:|---:|---:|---:|---:|")
     ticks = round((WINDOW[1] - WINDOW[0]) * 150)
     cases = ((None, True, "asleep (default)", "in the hub"), (None, False, "asleep (default)", "over Zenoh"),
-             (0.0, True, "awake (`sleep_after: 0`)", "in the hub"))
+             (0.0, True, "awake (`sleep_after: 0`)", "in the hub"),
+             (None, True, "asleep, free transport (`transport: exact`)", "in the hub"))
     samples = {case: [] for case in cases}
     for _ in range(REPEATS):
         for case in cases:
-            samples[case].append(window(case[1], case[0]))
+            samples[case].append(window(case[1], case[0], FREE if "free" in case[2] else None))
     sim = WINDOW[1] - WINDOW[0]
     for case in cases:
         hub, engine, bare = (statistics.median(s[k] for s in samples[case]) for k in range(3))
@@ -134,6 +138,19 @@ def bottling_plant() -> None:
     print(f"| asleep | {len(asleep)} | {wall_asleep:.1f} | {COMPARED / wall_asleep:.1f}× |")
     print(f"| awake | {len(awake)} | {wall_awake:.1f} | {COMPARED / wall_awake:.1f}× |")
     print(f"\nDelivered in both: {len(both)}, to the same sink: {same_sink}; delivery time asleep − awake: "
+          f"median {np.median(shift):+.3f} s, mean |Δ| {np.abs(shift).mean():.3f} s, "
+          f"largest {shift[np.argmax(np.abs(shift))]:+.3f} s.")
+
+    print(f"\n### What free transport changes: the first {COMPARED:g} s, routing in the hub\n")
+    free, wall_free = deliveries(None, FREE)
+    both = sorted(set(asleep) & set(free))
+    shift = np.array([free[b][1] - asleep[b][1] for b in both])
+    same_sink = sum(asleep[b][0] == free[b][0] for b in both)
+    print("| transport | delivered | wall s | real-time factor |")
+    print("|---|---:|---:|---:|")
+    print(f"| engine (default) | {len(asleep)} | {wall_asleep:.1f} | {COMPARED / wall_asleep:.1f}× |")
+    print(f"| exact | {len(free)} | {wall_free:.1f} | {COMPARED / wall_free:.1f}× |")
+    print(f"\nDelivered in both: {len(both)}, to the same sink: {same_sink}; delivery time free − engine: "
           f"median {np.median(shift):+.3f} s, mean |Δ| {np.abs(shift).mean():.3f} s, "
           f"largest {shift[np.argmax(np.abs(shift))]:+.3f} s.")
 

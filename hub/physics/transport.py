@@ -53,6 +53,7 @@ SINK = 0.005          # m: most distance between its base and the belt's surface
 STILL = 0.005         # m/s: on a still belt a bottle slower than this re-enters, to rest
 FIXED_MARGIN = SHAPE_MARGIN + 0.001   # m a free bottle keeps from fixed geometry beyond its travel
 LOOKAHEAD = 4         # ticks a free bottle's tests look forward, by default
+RETRY = 15            # ticks before a bottle found near something is looked at again
 LIST = 0.1            # m: the fixed boxes within this of a free bottle are the ones it is tested against
 
 
@@ -76,6 +77,7 @@ class FreeTransport:
         self.pull = np.zeros(0)             # per body: the velocity change the belt gave it at the last tick, m/s
         self._handed = None                 # this tick's (rows, fields, dvx, dvy) from Bottles.drive
         self.due = 0                        # the tick at which the free bottles are looked at next
+        self.next_try = np.zeros(0, int)    # per body: the tick from which it may be looked at to go free
         self.entered = 0                    # how many times a bottle left the engine (for figures)
         self.left = 0                       # and came back
         self._fixed = None                  # (centres, half extents, cos, sin) of fixed boxes
@@ -92,6 +94,7 @@ class FreeTransport:
         self.free = np.append(self.free, False)
         self.listed_at = np.vstack((self.listed_at, np.full((1, 2), np.inf)))
         self.pull = np.append(self.pull, 0.0)
+        self.next_try = np.append(self.next_try, 0)
 
     def arm(self, fixed_boxes, spheres, moving) -> None:
         """At the start: the fixed geometry a free bottle keeps clear of — boxes (centre, half
@@ -139,6 +142,8 @@ class FreeTransport:
         belt's pull may add to the way and FIXED_MARGIN. (Its ends and the box's corners give the
         distance whenever the segment is shorter than the bottle is wide.)"""
         b = self.bodies
+        if len(rows) == 0:
+            return np.zeros(0, bool)
         moved = np.hypot(*(positions[rows, :2] - self.listed_at[rows]).T)
         stale = moved > LIST / 2.0
         if stale.any():
@@ -176,38 +181,64 @@ class FreeTransport:
             hit |= (d < (b.radii[rows] + speed * horizon + widen)[:, None]).any(axis=1)
         return hit
 
+    def steady(self, rows, orientations, velocities, spins) -> np.ndarray:
+        """(len(rows),): upright and steady as a riding bottle is (tilt under TILT, spin under
+        SPIN, vertical speed under RISE), or free."""
+        x, y = orientations[rows, 0], orientations[rows, 1]
+        w = spins[rows]
+        return (((1.0 - 2.0 * (x * x + y * y) > np.cos(TILT)) & ((w * w).sum(axis=1) < SPIN * SPIN)
+                 & (np.abs(velocities[rows, 2]) < RISE)) | self.free[rows])
+
     def _touching(self, rows, times: int, positions, orientations, velocities, spins) -> np.ndarray:
         """(len(rows),): whether each of `rows` could touch another body in play or a moving part
-        within `times` × its look-ahead, by the wake rule's boxes with each body headed as far:
-        their bounds first (rest.bounds), the boxes only for the pairs whose bounds meet."""
+        within `times` × its look-ahead. Their bounds first (rest.bounds; pairs found by a sweep
+        along the plant's longer axis when there are many), then for each pair whose bounds meet:
+        two steady bottles (free, or upright and steady in the engine) by their footprints and
+        their relative motion — the difference of their velocities, of the belt's pull and their
+        rocking brings them together, nothing else; any other pair by the wake rule's boxes,
+        each body headed as far."""
         b = self.bodies
         play = b.in_play_rows()
         k = self.ahead[play] * times
         bound = bounds(b.radii[play], b.half_heights[play], velocities[play] * k[:, None], spins[play] * k[:, None],
                        self.dt)
         me = np.searchsorted(play, rows)
-        gap = (np.abs(positions[rows][:, None, :] - positions[play][None, :, :])
-               - bound[me][:, None, None] - bound[None, :, None])
-        meet = (gap < 0.0).all(axis=2)
-        meet[np.arange(len(rows)), me] = False   # not itself
+        i, j = _meeting(me, positions[play], bound)
         touching = np.zeros(len(rows), bool)
-        if meet.any():
-            i, j = np.nonzero(meet)
+        if len(i):
             a, o = rows[i], play[j]
-            ka, ko = (self.ahead[a] * times)[:, None], (self.ahead[o] * times)[:, None]
-            mine = boxes(orientations[a], b.radii[a], b.half_heights[a], velocities[a] * ka, spins[a] * ka, self.dt)
-            theirs = boxes(orientations[o], b.radii[o], b.half_heights[o], velocities[o] * ko, spins[o] * ko, self.dt)
-            hit = (np.abs(positions[a] - positions[o]) < mine + theirs).all(axis=1)
-            touching[i[hit]] = True
+            both = np.concatenate([a, o])
+            tight = self.steady(both, orientations, velocities, spins)
+            tight = tight[:len(a)] & tight[len(a):]
+            loose = ~tight
+            if loose.any():
+                la, lo = a[loose], o[loose]
+                both, at = np.unique(np.concatenate([la, lo]), return_inverse=True)   # one boxes call for all
+                kk = (self.ahead[both] * times)[:, None]
+                box = boxes(orientations[both], b.radii[both], b.half_heights[both], velocities[both] * kk,
+                            spins[both] * kk, self.dt)
+                hit = (np.abs(positions[la] - positions[lo]) < box[at[:len(la)]] + box[at[len(la):]]).all(axis=1)
+                touching[i[loose][hit]] = True
+            if tight.any():
+                ta, to = a[tight], o[tight]
+                n = np.maximum(self.ahead[ta], self.ahead[to]) * times
+                apart = positions[ta] - positions[to]
+                closing = velocities[ta, :2] - velocities[to, :2]
+                rock = (np.sqrt((spins[ta] ** 2).sum(axis=1) * (2 * b.radii[ta] ** 2 + b.half_heights[ta] ** 2))
+                        + np.sqrt((spins[to] ** 2).sum(axis=1) * (2 * b.radii[to] ** 2 + b.half_heights[to] ** 2)))
+                reach = ((np.hypot(closing[:, 0], closing[:, 1]) + rock) * n * self.dt
+                         + (self.pull[ta] + self.pull[to]) * n * (n + 1) / 2.0 * self.dt)
+                gap = np.hypot(apart[:, 0], apart[:, 1]) - b.radii[ta] - b.radii[to] - 2.0 * SHAPE_MARGIN
+                hit = (gap < reach) & (np.abs(apart[:, 2]) < b.half_heights[ta] + b.half_heights[to])
+                touching[i[tight][hit]] = True
         moving = self._moving
         if moving is not None and moving.parts:
-            # A part's box as the wake rule widens it for one tick, and headed as far again as the farthest look.
+            # A part's box as the wake rule widens it for one tick, and headed as far again as the
+            # farthest look; against each bottle's bound (which holds its box).
             horizon = float(self.ahead[rows].max()) * times * self.dt
             centres = np.array([p.box()[0] for p in moving.parts])
             extents = np.array([p.box()[1] + np.abs(p.axis) * abs(p.velocity) * horizon for p in moving.parts])
-            k = self.ahead[rows, None] * times
-            mine = boxes(orientations[rows], b.radii[rows], b.half_heights[rows], velocities[rows] * k,
-                         spins[rows] * k, self.dt)
+            mine = np.repeat(bound[me][:, None], 3, axis=1)
             touching |= overlapping(positions[rows], mine, centres, extents).any(axis=1)
         return touching
 
@@ -276,20 +307,18 @@ class FreeTransport:
             self._changed()
 
     # --- after a tick: who may go -----------------------------------------------------------
-    def take_free(self, rows: np.ndarray, held) -> None:
+    def take_free(self, tick: int, rows: np.ndarray, held) -> None:
         """After a tick's read: of the awake `rows`, the bottles riding a belt steadily and clear
-        of everything for `2·ahead` ticks leave the engine."""
+        of everything for `2·ahead` ticks leave the engine. One that rides a belt but is near
+        something is looked at again RETRY ticks later (a queue stays one for a while)."""
         b = self.bodies
-        rows = rows[self.allowed[rows]]
+        rows = rows[self.allowed[rows] & (self.next_try[rows] <= tick)]
         if held:
             rows = rows[~np.isin(rows, held)]
         if len(rows) == 0:
             return
         p, q, v, w = b.positions, b.orientations, b.velocities, b.angular_velocities
-        x, y = q[rows, 0], q[rows, 1]
-        steady = ((1.0 - 2.0 * (x * x + y * y) > np.cos(TILT)) & ((w[rows] ** 2).sum(axis=1) < SPIN * SPIN)
-                  & (np.abs(v[rows, 2]) < RISE))
-        rows = rows[steady]
+        rows = rows[self.steady(rows, q, v, w)]
         if len(rows) == 0:
             return
         field = self._fields(rows, b.live_rows, b.under, p)
@@ -304,11 +333,10 @@ class FreeTransport:
         rows = rows[self._on_belt(rows, field, twice, p, v)]
         if len(rows) == 0:
             return
-        rows = rows[~self._touching(rows, twice, p, q, v, w)]
-        if len(rows) == 0:
-            return
-        self._list(rows, p)
-        rows = rows[~self._fixed_hit(rows, twice, p, v)]
+        near = self._touching(rows, twice, p, q, v, w)
+        near[~near] = self._fixed_hit(rows[~near], twice, p, v)
+        self.next_try[rows[near]] = tick + RETRY
+        rows = rows[~near]
         if len(rows) == 0:
             return
         for n in rows.tolist():
@@ -392,3 +420,36 @@ class FreeTransport:
 def _box_distance(x, y, half) -> np.ndarray:
     """Distance from points (x, y), in a box's frame, to the box of half extents `half` (0 inside)."""
     return np.hypot(np.maximum(np.abs(x) - half[:, 0], 0.0), np.maximum(np.abs(y) - half[:, 1], 0.0))
+
+
+SWEEP = 20000   # (rows × bodies) above which pairs are found by a sweep rather than all at once
+
+
+def _meeting(me, points, bound):
+    """The pairs (i, j): row i of `me` (indices into `points`) and point j whose boxes of half
+    extent `bound` (per point, every axis) overlap, j ≠ me[i]."""
+    if len(me) * len(points) <= SWEEP:
+        gap = np.abs(points[me][:, None, :] - points[None, :, :]) - bound[me][:, None, None] - bound[None, :, None]
+        meet = (gap < 0.0).all(axis=2)
+        meet[np.arange(len(me)), me] = False
+        return np.nonzero(meet)
+    # Sorted along the longer axis, each point against the next, the one after, …, until no pair is near.
+    axis = int(np.argmax(np.ptp(points[:, :2], axis=0)))
+    order = np.argsort(points[:, axis], kind="stable")
+    p, r = points[order], bound[order]
+    wanted = np.full(len(points), -1)
+    wanted[me] = np.arange(len(me))
+    w = wanted[order]
+    found_i, found_j = [], []
+    for shift in range(1, len(p)):
+        near = (np.abs(p[shift:] - p[:-shift]) < (r[shift:] + r[:-shift])[:, None]).all(axis=1)
+        if not (p[shift:, axis] - p[:-shift, axis] < r[shift:] + r[:-shift]).any():
+            break
+        lo, hi = np.flatnonzero(near), np.flatnonzero(near) + shift
+        for x, y in ((lo, hi), (hi, lo)):
+            keep = w[x] >= 0
+            found_i.append(w[x][keep])
+            found_j.append(order[y][keep])
+    if not found_i:
+        return np.zeros(0, int), np.zeros(0, int)
+    return np.concatenate(found_i), np.concatenate(found_j)

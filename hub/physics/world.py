@@ -380,7 +380,7 @@ class PhysicsWorld:
                 if rest.enabled:
                     sleep.settle(self.fields, arms.held_rows(), moving)
                 if free:
-                    transport.take_free(b.awake_rows(), arms.held_rows())
+                    transport.take_free(self.tick, b.awake_rows(), arms.held_rows())
             if event and stop_on_event:
                 return done
         return substeps
