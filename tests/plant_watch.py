@@ -70,10 +70,11 @@ class Watch:
 
 def run_watched(path, out: Path | None = None, overrides: dict | None = None):
     """Load, build and run a scenario under a Watch; return (scenario, recorder, watch). The
-    world compares every resting bottle with the engine at every tick (PhysicsWorld.check_rest)."""
+    world asks the engine about every resting bottle and every one in free transport at every
+    tick (PhysicsWorld.check_rest, check_free)."""
     scenario = load_scenario(path, overrides)
     with Run(scenario, out=out) as run:
-        run.plant.world.check_rest = True
+        run.plant.world.check_rest = run.plant.world.check_free = True
         watch = Watch(run.plant)
         run.master.observers.append(watch)
         run.run()

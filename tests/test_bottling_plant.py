@@ -1,13 +1,16 @@
 """The bottling plant (scenarios/bottling_plant.yaml, the scenario `make run` runs) on shortened
 runs: every good bottle delivered reaches the sink of its destination, every bottle the filler
 left unfilled is pushed into the reject lane, every lane delivers, no bottle tips, falls, speeds
-or passes a closed gate, and nothing jams; routing by the plant-management participant over
-Zenoh gives the run of the same logic in-process, bit for bit; a participant with two lanes
+or passes a closed gate, and nothing jams — with the engine moving every bottle and with free
+transport (transport: exact); routing by the plant-management participant over Zenoh gives the
+run of the same logic in-process, bit for bit, either way; a participant with two lanes
 swapped makes `planthub test` fail naming the misrouted bottles."""
 import csv
 import json
 import subprocess
 import sys
+
+import pytest
 
 from hub.scenario.checker import load_scenario
 from modules.source import Source
@@ -47,8 +50,10 @@ def deliveries(scenario, directory):
     return taken, [(ident, wanted[ident], sink) for sink, ident in taken if LANES[sink] != wanted[ident]]
 
 
-def test_good_bottles_reach_their_destinations_and_the_bad_the_reject_lane_soundly(tmp_path):
-    overrides = {"run.duration": DURATION, "objects.filler.faults": FAULTS, **IN_PROCESS}
+@pytest.mark.parametrize("transport", ["engine", "exact"])   # exact: every bottle may ride free
+def test_good_bottles_reach_their_destinations_and_the_bad_the_reject_lane_soundly(tmp_path, transport):
+    overrides = {"run.duration": DURATION, "objects.filler.faults": FAULTS, "defaults.source.transport": transport,
+                 **IN_PROCESS}
     scenario, _, watch = run_watched(SCENARIO, tmp_path, overrides)
     watch.assert_sound()
     events = rows(tmp_path / "events.csv")
@@ -82,9 +87,11 @@ def test_the_run_summary_counts_what_the_event_log_shows_and_finds_no_jam(tmp_pa
     assert "  misrouted    none" in stdout and "  jams         none" in stdout
 
 
-def test_routing_over_the_bus_gives_the_in_process_run_bit_for_bit(tmp_path):
+@pytest.mark.parametrize("transport", ["engine", "exact"])
+def test_routing_over_the_bus_gives_the_in_process_run_bit_for_bit(tmp_path, transport):
     for name, overrides in (("bus", {}), ("in_process", IN_PROCESS)):
-        run_scenario(SCENARIO, tmp_path / name, {"run.duration": 40.0, **overrides})
+        run_scenario(SCENARIO, tmp_path / name, {"run.duration": 40.0, "defaults.source.transport": transport,
+                                                 **overrides})
     for file in ("recording.csv", "events.csv"):
         assert (tmp_path / "bus" / file).read_bytes() == (tmp_path / "in_process" / file).read_bytes()
     assert any(e["slot"] == "control.logic.sw1_work" for e in rows(tmp_path / "bus" / "events.csv"))

@@ -166,7 +166,7 @@ class Bottles:
         if len(transport.rows):
             free = transport.free[bodies]
             if free.any():
-                transport.hand(bodies[free], f[free], dvx[free], dvy[free])
+                transport.hand(bodies[free], dvx[free], dvy[free])
                 engine = ~free
                 bodies, f, points = bodies[engine], f[engine], points[engine]
                 dvx, dvy = dvx[engine], dvy[engine]

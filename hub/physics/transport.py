@@ -1,6 +1,6 @@
 """Free transport: a bottle riding a belt that nothing can touch leaves the engine and follows its belt's law in numpy.
 
-A bottle carried by a belt, clear of every other body, rail, gate and hand-over, costs the
+A bottle carried by a belt, clear of every other body, rail, gate and belt end, costs the
 engine its contacts with the floor and the hub two state reads and a force per tick, and all
 the engine adds to what the belt's law gives it is a rocking of ~0.5° and a sink of ~2 mm into
 the floor. In free transport the hub moves it itself, all such bottles at once: per tick the
@@ -18,9 +18,12 @@ before the tick at which anything could touch it. "Anything" by three tests, eac
 at once after a bottle was put down, while a moving part is under way and after a belt changed
 its speed:
 
-- bodies: its box and every other body's in play (awake, resting, free, just put down) as the
-  wake rule widens them (rest.py: margins, the contact breaking threshold, and where each is
-  headed), each headed `ahead` ticks instead of one; a moving part's box likewise;
+- bodies: every other body in play (awake, resting, free, just put down). Two steady bottles
+  (free, or upright and steady in the engine) by their footprints — the gap between them against
+  what their relative velocity, their rocking and the belt's pull can close — so that a line of
+  bottles 2 cm apart rides free; any other pair by the wake rule's boxes (rest.py: margins, the
+  contact breaking threshold, and where each is headed), each headed `ahead` ticks instead of
+  one; a moving part's box likewise;
 - fixed geometry: rails and walls, gates and blades whether solid or not, and the spheres robot
   arms reach: the distance of its way ahead (a segment at its velocity) from each box listed
   within LIST of it, against its radius, FIXED_MARGIN and what the belt's pull may add;
@@ -72,17 +75,16 @@ class FreeTransport:
         self.listed_at = np.zeros((0, 2))   # where each bottle's fixed boxes were listed (x, y)
         self._pair_row = np.zeros(0, int)   # (bottle, fixed box) pairs within LIST: the boxes each may reach
         self._pair_box = np.zeros(0, int)
-        self.fields_now = np.zeros(0, int)  # the field each free bottle rides at this tick
         self.rows = np.zeros(0, int)        # the free rows, in body order
         self.pull = np.zeros(0)             # per body: the velocity change the belt gave it at the last tick, m/s
-        self._handed = None                 # this tick's (rows, fields, dvx, dvy) from Bottles.drive
+        self._handed = None                 # this tick's (rows, dvx, dvy) from Bottles.drive
         self.due = 0                        # the tick at which the free bottles are looked at next
         self.next_try = np.zeros(0, int)    # per body: the tick from which it may be looked at to go free
         self.entered = 0                    # how many times a bottle left the engine (for figures)
         self.left = 0                       # and came back
         self._fixed = None                  # (centres, half extents, cos, sin) of fixed boxes
         self._spheres = (np.zeros((0, 3)), np.zeros(0))
-        self._moving = None                 # MovingParts, tested at every tick (their boxes move)
+        self._moving = None                 # MovingParts, tested at every look (their boxes move)
         self._probes: dict[int, int] = {}   # body row → collision shape, for `check`
 
     def add(self, allowed: bool, ahead: int = LOOKAHEAD) -> None:
@@ -110,10 +112,10 @@ class FreeTransport:
         self._moving = moving
 
     # --- the tests ------------------------------------------------------------------------
-    def _gaps(self, points, radii, half_heights, boxes=slice(None)) -> np.ndarray:
+    def _gaps(self, points, radii, half_heights) -> np.ndarray:
         """(N, boxes): how far each upright bottle's footprint at `points` is from each fixed box
         (negative: into it); inf where they are apart in height."""
-        c, h, cos, sin = (a[boxes] for a in self._fixed)
+        c, h, cos, sin = self._fixed
         dx = points[:, 0, None] - c[None, :, 0]
         dy = points[:, 1, None] - c[None, :, 1]
         gx = np.maximum(np.abs(cos * dx + sin * dy) - h[:, 0], 0.0)
@@ -352,10 +354,10 @@ class FreeTransport:
         """A belt's speed changed: the free bottles are looked at before the next tick."""
         self.due = 0
 
-    def hand(self, rows, fields, dvx, dvy) -> None:
+    def hand(self, rows, dvx, dvy) -> None:
         """Before the engine's step: the velocity changes the belts' law gives the free `rows` on
         a belt this tick (Bottles.drive works them out with the engine-driven bottles', in one go)."""
-        self._handed = (rows, fields, dvx, dvy)
+        self._handed = (rows, dvx, dvy)
 
     def advance(self) -> None:
         """After the engine's step: every free bottle one tick on — the velocity change it was
@@ -367,7 +369,7 @@ class FreeTransport:
         v = b.velocities[rows]
         handed, self._handed = self._handed, None
         if handed is not None and len(handed[0]):
-            on, _, dvx, dvy = handed
+            on, dvx, dvy = handed
             at = np.searchsorted(rows, on)
             v[at, 0] += dvx
             v[at, 1] += dvy
