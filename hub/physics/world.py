@@ -196,12 +196,15 @@ class PhysicsWorld:
         return field
 
     def set_field_speed(self, field: int, speed: float) -> None:
-        """A belt's speed; bodies resting on it wake when it changes."""
-        if speed != self.fields.speeds[field] and self.rest.resting.any():
+        """A belt's speed; bodies resting on it wake when it changes. The same speed again (every
+        belt sets its speed at every communication point) changes nothing and costs nothing: the
+        watch's bound follows the speeds a belt changes to (it starts from those at load)."""
+        if speed == self.fields.speeds[field]:
+            return
+        if self.rest.resting.any():
             self.sleep.wake(self.rest.on_field(field, self.bodies.positions))
         self.watch.belt_speed(speed)
-        if speed != self.fields.speeds[field]:
-            self.transport.speed_changed()
+        self.transport.speed_changed()
         self.fields.set_speed(field, speed)
 
     def add_cylinder(self, base, radius: float, height: float, mass: float, label: str) -> int:
