@@ -127,7 +127,7 @@ class Engine:
 
     def leave(self, body: int) -> None:
         """Take a dynamic body out of the collision world and put it to sleep: the engine keeps
-        no pair, contact or island for it (a resting bottle, one in free transport). With the
+        no pair, contact or island for it (a resting, parked or free bottle). With the
         ~50 resting bottles of the bottling plant's busiest window out, the engine's part of the
         hub's tick fell from 1662 to 1150 µs (README, *The bottling plant*)."""
         self.call(pybullet.setCollisionFilterGroupMask, body, -1, 0, 0)

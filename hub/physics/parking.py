@@ -32,8 +32,7 @@ class Parking:
         for b, z in self.bottles.parts(body):
             call(pybullet.resetBasePositionAndOrientation, b, (spot[0], spot[1], spot[2] + z), (0, 0, 0, 1))
             call(pybullet.resetBaseVelocity, b, (0, 0, 0), (0, 0, 0))
-            call(pybullet.setCollisionFilterGroupMask, b, -1, 0, 0)
-            self.engine.sleep(b)
+            self.engine.leave(b)
         self.bodies.parked.add(body)
         self.rest.forget(body)
         self.bodies.moved()
@@ -45,8 +44,7 @@ class Parking:
             center = (base[0], base[1], base[2] + half_heights[body] + z)
             call(pybullet.resetBasePositionAndOrientation, b, center, (0, 0, 0, 1))
             call(pybullet.resetBaseVelocity, b, (0, 0, 0), (0, 0, 0))
-            call(pybullet.setCollisionFilterGroupMask, b, -1, 1, -1)   # pybullet's default for a dynamic body
-            self.engine.wake(b)
+            self.engine.rejoin(b)
         self.bodies.parked.discard(body)
         self.rest.forget(body)
         centre = (base[0], base[1], base[2] + half_heights[body])

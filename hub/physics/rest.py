@@ -73,9 +73,14 @@ def boxes(orientations: np.ndarray, radii: np.ndarray, half_heights: np.ndarray,
     local = np.stack((radii, radii, half_heights), axis=1)
     extents = np.einsum("nij,nj->ni", rotation, local) + (SHAPE_MARGIN + BREAKING)
     if velocities is not None:
-        reach = np.sqrt((spins * spins).sum(axis=1) * (2.0 * radii * radii + half_heights * half_heights))
-        extents += (np.abs(velocities) + reach[:, None]) * dt
+        extents += (np.abs(velocities) + swing(radii, half_heights, spins)[:, None]) * dt
     return extents
+
+
+def swing(radii, half_heights, spins) -> np.ndarray:
+    """(N,): how fast a bottle's farthest point from its centre of mass moves as it turns, m/s
+    (|ω|·√(2r² + h²), at most: a corner of its box)."""
+    return np.sqrt((spins * spins).sum(axis=1) * (2.0 * radii * radii + half_heights * half_heights))
 
 
 def overlapping(centres_a, extents_a, centres_b, extents_b) -> np.ndarray:

@@ -44,7 +44,7 @@ from __future__ import annotations
 import numpy as np
 
 from hub.physics._quiet import quiet_stderr
-from hub.physics.rest import SHAPE_MARGIN, bounds, boxes, overlapping
+from hub.physics.rest import SHAPE_MARGIN, bounds, boxes, overlapping, swing
 
 with quiet_stderr():
     import pybullet
@@ -226,8 +226,8 @@ class FreeTransport:
                 n = np.maximum(self.ahead[ta], self.ahead[to]) * times
                 apart = positions[ta] - positions[to]
                 closing = velocities[ta, :2] - velocities[to, :2]
-                rock = (np.sqrt((spins[ta] ** 2).sum(axis=1) * (2 * b.radii[ta] ** 2 + b.half_heights[ta] ** 2))
-                        + np.sqrt((spins[to] ** 2).sum(axis=1) * (2 * b.radii[to] ** 2 + b.half_heights[to] ** 2)))
+                rock = (swing(b.radii[ta], b.half_heights[ta], spins[ta])
+                        + swing(b.radii[to], b.half_heights[to], spins[to]))
                 reach = ((np.hypot(closing[:, 0], closing[:, 1]) + rock) * n * self.dt
                          + (self.pull[ta] + self.pull[to]) * n * (n + 1) / 2.0 * self.dt)
                 gap = np.hypot(apart[:, 0], apart[:, 1]) - b.radii[ta] - b.radii[to] - 2.0 * SHAPE_MARGIN
@@ -331,12 +331,11 @@ class FreeTransport:
         rows, field = rows[level], field[level]
         if len(rows) == 0:
             return
-        twice = 2
-        rows = rows[self._on_belt(rows, field, twice, p, v)]
+        rows = rows[self._on_belt(rows, field, 2, p, v)]     # twice the look-ahead, as below
         if len(rows) == 0:
             return
-        near = self._touching(rows, twice, p, q, v, w)
-        near[~near] = self._fixed_hit(rows[~near], twice, p, v)
+        near = self._touching(rows, 2, p, q, v, w)
+        near[~near] = self._fixed_hit(rows[~near], 2, p, v)
         self.next_try[rows[near]] = tick + RETRY
         rows = rows[~near]
         if len(rows) == 0:
