@@ -24,7 +24,8 @@ ALLOWED = {
     "view": {"core", "bus", "physics"},
     "run": {"core", "bus", "scenario", "physics", "logic", "view"},
     "reports": {"core", "scenario", "physics", "run"},
-    "cli": {"core", "bus", "scenario", "physics", "logic", "run", "reports", "view"},
+    "gateway": {"core", "bus", "scenario"},
+    "cli": {"core", "bus", "scenario", "physics", "logic", "run", "reports", "view", "gateway"},
 }
 #: files at the top of hub/: the public names users write, and what each stands for
 TOP = {"__init__": {"run"}, "__main__": {"cli"}, "participant": {"bus"}, "live": {"bus"}}

@@ -1,4 +1,4 @@
-"""Command line: `planthub run|validate|test|describe|check-fmu|report|plot|compare|serve-fmu|send|view` (also `python -m hub`)."""
+"""Command line: `planthub run|validate|test|describe|check-fmu|report|plot|compare|serve-fmu|send|view|gateway` (also `python -m hub`)."""
 from __future__ import annotations
 
 import argparse
@@ -11,6 +11,9 @@ from pathlib import Path
 from hub.cli.bus import add_commands as add_bus_commands
 from hub.cli.compare import add_command as add_compare_command
 from hub.cli.describe import describe
+from hub.cli.gateway import EXAMPLE as add_gateway_example
+from hub.cli.gateway import add_arguments as add_gateway_arguments
+from hub.cli.gateway import run as run_gateway
 from hub.cli.exits import BAD_SCENARIO, FAILED, INTERRUPTED, OK, TABLE, USAGE, UsageError
 from hub.cli.logs import diagnostics
 from hub.cli.options import add_run_arguments, add_set, overrides, verbosity, verbosity_parent
@@ -105,7 +108,14 @@ def parser() -> tuple[argparse.ArgumentParser, dict]:
                         help="folder for report.md, its plots and runs (default: runs/report_<name>)")
     report.add_argument("--no-plots", action="store_true", help="write the numbers only (no matplotlib needed)")
 
-    handlers = {"run": run_command, "validate": _validate, "test": test_command,
+    gateway = command("gateway", "serve a participant object to a PLC or SCADA client over OPC UA or Modbus TCP",
+                      add_gateway_example,
+                      "Serve a scenario's participant object to a PLC or SCADA client: an OPC UA or Modbus TCP\n"
+                      "server whose tags (generated from the object's slots, see --export-tags) are the plant's\n"
+                      "sensors and the actuators' commands; it joins the run as that participant.")
+    add_gateway_arguments(gateway)
+
+    handlers = {"run": run_command, "gateway": run_gateway, "validate": _validate, "test": test_command,
                 "describe": lambda args: describe(args.module), "check-fmu": _check_fmu, "report": _report,
                 **add_bus_commands(sub, parents=loud, formatter=_FORMAT, epilog=TABLE),
                 "view": add_view_command(sub, parents=loud, formatter=_FORMAT, epilog=TABLE),

@@ -1,0 +1,101 @@
+"""`planthub gateway opcua|modbus SCENARIO --object NAME`: a scenario's participant object served to a PLC
+or SCADA client over OPC UA or Modbus TCP (hub/gateway/), joined to the run as that participant.
+A scenario launches it as `python: [hub, gateway, opcua, FILE, --object, NAME, …]` (`python -m hub gateway …`)."""
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+from pathlib import Path
+
+from hub.core.errors import PlanthubError
+
+_log = logging.getLogger(__name__)
+
+ENDPOINTS = {"opcua": "opc.tcp://127.0.0.1:4840/planthub", "modbus": "127.0.0.1:5020"}
+EXAMPLE = ("planthub gateway opcua scenarios/bottling_plant.yaml --object control --endpoint "
+           "opc.tcp://0.0.0.0:4840/planthub \\\n      --set objects.control.python=null --connect tcp/127.0.0.1:7447")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from hub.bus.participant import add_options
+    from hub.cli.options import add_set
+
+    parser.add_argument("protocol", choices=sorted(ENDPOINTS), help="opcua (a server at opc.tcp://…) or modbus (TCP)")
+    parser.add_argument("scenario", type=Path, help="the run's scenario: its participant object gives the tags")
+    parser.add_argument("--object", required=True, metavar="NAME", help="the participant object the gateway serves")
+    parser.add_argument("--endpoint", metavar="ADDRESS",
+                        help=f"where the server listens (default: opcua {ENDPOINTS['opcua']}, modbus "
+                             f"{ENDPOINTS['modbus']})")
+    parser.add_argument("--tags", type=Path, metavar="FILE.yaml", help="tag map overrides (`tags: {SLOT: {...}}`)")
+    parser.add_argument("--export-tags", type=Path, metavar="FILE.csv",
+                        help="write the tag map as a table for a PLC's tag editor and exit")
+    parser.add_argument("--sync", choices=["lockstep", "live"], default="lockstep",
+                        help="lockstep: hold the plant at every scan until the PLC answers (deterministic); "
+                             "live: never hold (run the plant with --realtime)")
+    parser.add_argument("--scan", type=float, metavar="S",
+                        help="lockstep: plant time between two scans, a whole number of communication steps "
+                             "(default: every step)")
+    parser.add_argument("--plc-timeout", type=float, default=0.5, metavar="S",
+                        help="lockstep: wall-clock s the PLC has to answer a scan (less than the run's bus lease)")
+    parser.add_argument("--ready-timeout", type=float, default=30.0, metavar="S",
+                        help="lockstep: s to wait for the PLC to set plc_ready before joining the plant")
+    parser.add_argument("--user", metavar="NAME",
+                        help="opcua: only this user may connect; the password is taken from PLANTHUB_OPCUA_PASSWORD")
+    add_set(parser)
+    add_options(parser)
+
+
+def run(args) -> int:
+    from hub.bus.participant import check_options, serve
+    from hub.cli.options import overrides
+    from hub.gateway.image import ProcessImage
+    from hub.gateway.participant import Gateway
+    from hub.gateway.server_thread import ServerThread
+    from hub.gateway.tags import tag_map
+    from hub.scenario.checker import load_scenario
+
+    parser = args.command_parser
+    scenario = load_scenario(args.scenario, overrides(args))
+    tags = tag_map(scenario, args.object, args.tags)
+    if args.export_tags:
+        args.export_tags.write_text(tags.csv())
+        print(f"{len(tags.tags)} tags of {args.object!r} written to {args.export_tags}")
+        return 0
+    args.run = args.run or scenario.name
+    args.name = args.name or args.object
+    args = check_options(parser, args)
+    step = scenario.run.substeps / scenario.run.physics_rate
+    if args.scan is not None and (args.scan <= 0 or abs(args.scan / step - round(args.scan / step)) > 1e-9):
+        parser.error(f"--scan {args.scan:g}: a whole number of the run's communication step ({step:g} s)")
+    if args.sync == "lockstep" and not 0 < args.plc_timeout < args.lease:
+        parser.error(f"--plc-timeout {args.plc_timeout:g}: above 0 and below the lease (--lease {args.lease:g} s), "
+                     f"or the hub takes the waiting gateway for frozen")
+    user = None
+    if args.user:
+        password = os.environ.get("PLANTHUB_OPCUA_PASSWORD")
+        if args.protocol != "opcua" or not password:
+            parser.error("--user: only for opcua, with the password in PLANTHUB_OPCUA_PASSWORD")
+        user = (args.user, password)
+    image = ProcessImage(tags)
+    endpoint = args.endpoint or ENDPOINTS[args.protocol]
+    if args.protocol == "opcua":
+        from hub.gateway.opcua import OpcUaServer
+        protocol = OpcUaServer(image, endpoint, user)
+    else:
+        from hub.gateway.modbus import ModbusServer
+        protocol = ModbusServer(image, endpoint)
+    with ServerThread(protocol, f"{args.protocol} server at {endpoint}") as server:
+        gateway = Gateway(tags, server, mode=args.sync, scan=args.scan, plc_timeout=args.plc_timeout,
+                          ready_timeout=args.ready_timeout)
+        _log.info(f"gateway {args.object!r}: {len(tags.tags)} tags at {endpoint} ({args.sync})")
+        try:
+            gateway.wait_for_plc()
+        except PlanthubError as exc:
+            _log.error(f"planthub gateway {args.object!r}: {exc} (at {endpoint})")
+            return 1
+        status = serve(gateway, args=args)
+        if image.refused:
+            _log.warning(f"gateway {args.object!r}: {image.refused} writes refused (each logged above)")
+        return status
+

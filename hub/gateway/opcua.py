@@ -1,0 +1,135 @@
+"""The OPC UA side of a gateway (asyncua): every asyncua call planthub makes is in this file.
+
+Address space: Objects/<run>/<folder>/<tag>, one folder per plant object a tag is wired to (and
+`gateway` for the handshake), in the namespace `urn:planthub:<run>`; each variable's node id is
+`ns=<that namespace>;s=<folder>.<tag>`, its data type the tag's, its Description where it comes
+from, its EngineeringUnits and EURange where the tag map gives them. Only the PLC's outputs are
+writable. A write is refused with the protocol's own status: an unknown node BadNodeIdUnknown, a
+PLC input BadUserAccessDenied (asyncua, for every user but an admin), a value of another type
+BadTypeMismatch, a value out of the tag's range or not finite BadOutOfRange; each refusal is logged
+and nothing reaches the plant. Clients subscribe with their own sampling interval.
+"""
+from __future__ import annotations
+
+import dataclasses
+import logging
+
+from asyncua import Server, ua
+from asyncua.crypto.permission_rules import User, UserRole
+from asyncua.server.address_space import AttributeService
+
+from hub.gateway.image import ProcessImage
+from hub.gateway.tags import OUTPUT, Tag, namespace
+
+_VARIANT = {"Boolean": ua.VariantType.Boolean, "UInt32": ua.VariantType.UInt32, "Int32": ua.VariantType.Int32,
+            "Double": ua.VariantType.Double, "String": ua.VariantType.String}
+for _name in ("asyncua", "asyncua.server", "asyncua.server.address_space"):
+    logging.getLogger(_name).setLevel(logging.ERROR)   # asyncua logs every session, and warns of NoSecurity
+
+
+class OpcUaServer:
+    """The tags of `image` served at `endpoint` (opc.tcp://HOST:PORT/PATH)."""
+
+    def __init__(self, image: ProcessImage, endpoint: str, user: tuple[str, str] | None = None):
+        self.image, self.endpoint, self.user = image, endpoint, user
+        self.server = None
+        self.nodes = {}        # slot → NodeId
+
+    async def start(self) -> None:
+        server = Server(user_manager=_OneUser(self.user) if self.user else None)
+        await server.init()
+        server.set_endpoint(self.endpoint)
+        server.set_server_name(f"planthub gateway: {self.image.tags.run}")
+        server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
+        if self.user:
+            server.set_identity_tokens([ua.UserNameIdentityToken])
+        ns = await server.register_namespace(namespace(self.image.tags.run))
+        root = await server.nodes.objects.add_folder(ua.NodeId(self.image.tags.run, ns), self.image.tags.run)
+        folders = {}
+        for tag in self.image.tags.tags:
+            if tag.folder not in folders:
+                folders[tag.folder] = await root.add_folder(ua.NodeId(tag.folder, ns), tag.folder)
+            node = await folders[tag.folder].add_variable(
+                ua.NodeId(tag.node_id, ns), tag.name, ua.Variant(self.image.values[tag.slot], _VARIANT[tag.opcua_type]))
+            await node.write_attribute(ua.AttributeIds.Description,
+                                       ua.DataValue(ua.Variant(ua.LocalizedText(tag.description))))
+            if tag.units:
+                await node.add_property(ns, "EngineeringUnits", ua.EUInformation(DisplayName=ua.LocalizedText(tag.units),
+                                                                                Description=ua.LocalizedText(tag.units)))
+            limits = tag.range or tag.scale
+            if limits:
+                await node.add_property(ns, "EURange", ua.Range(Low=float(limits[0]), High=float(limits[1])))
+            if tag.direction == OUTPUT:
+                await node.set_writable()
+            self.nodes[tag.slot] = node.nodeid
+        server.iserver.attribute_service = _CheckedWrites(server.iserver.aspace, self.image,
+                                                          {self.nodes[t.slot]: t for t in self.image.tags.tags})
+        await server.start()
+        self.server = server
+
+    async def publish(self, changed: dict) -> None:
+        for slot, value in changed.items():
+            tag = self.image.tags.by_slot[slot]
+            await self.server.write_attribute_value(self.nodes[slot], ua.DataValue(ua.Variant(value, _VARIANT[tag.opcua_type])))
+
+    async def stop(self) -> None:
+        if self.server is not None:
+            await self.server.stop()
+            self.server = None
+
+
+class _CheckedWrites(AttributeService):
+    """asyncua's attribute service, with each write to a tag checked against the tag map first and
+    each accepted one handed to the process image."""
+
+    def __init__(self, aspace, image: ProcessImage, tags: dict):
+        super().__init__(aspace)
+        self.image, self.tags = image, tags
+
+    async def write(self, params, user=User(role=UserRole.Admin)):
+        results, passed = [], []
+        for k, item in enumerate(params.NodesToWrite):
+            tag = self.tags.get(item.NodeId)
+            status = self._check(tag, item) if tag is not None and item.AttributeId == ua.AttributeIds.Value else None
+            results.append(status)
+            if status is None:
+                passed.append(k)
+        done = await super().write(dataclasses.replace(params, NodesToWrite=[params.NodesToWrite[k] for k in passed]), user)
+        for k, status in zip(passed, done):
+            results[k] = status
+            item = params.NodesToWrite[k]
+            tag = self.tags.get(item.NodeId)
+            if tag is not None and item.AttributeId == ua.AttributeIds.Value:
+                if status.is_good():
+                    self.image.write(tag.slot, item.Value.Value.Value)
+                else:
+                    self.image.refuse(f"{tag.node_id} (OPC UA)", status.name)
+        return results
+
+    def _check(self, tag: Tag, item):
+        """None if the write may go on to asyncua, else the status that refuses it."""
+        if tag.direction != OUTPUT:
+            return None   # asyncua refuses it by the node's access level
+        variant = item.Value.Value
+        if variant is None or variant.VariantType != _VARIANT[tag.opcua_type]:
+            got = variant.VariantType.name if variant is not None else "nothing"
+            self.image.refuse(f"{tag.node_id} (OPC UA)", f"BadTypeMismatch: {got}, the tag is {tag.opcua_type}")
+            return ua.StatusCode(ua.StatusCodes.BadTypeMismatch)
+        try:
+            tag.check_written(variant.Value)
+        except ValueError as exc:
+            self.image.refuse(f"{tag.node_id} (OPC UA)", f"BadOutOfRange: {exc}")
+            return ua.StatusCode(ua.StatusCodes.BadOutOfRange)
+        return None
+
+
+class _OneUser:
+    """One user name and password; anyone else is refused (asyncua answers BadUserAccessDenied)."""
+
+    def __init__(self, user: tuple[str, str]):
+        self.name, self.password = user
+
+    def get_user(self, iserver, username=None, password=None, certificate=None):
+        if username == self.name and password == self.password:
+            return User(role=UserRole.User, name=username)
+        return None

@@ -1,0 +1,58 @@
+"""A protocol server (OPC UA, Modbus) in its own thread with its own asyncio event loop: the plant's
+steps call into it with a limit on every wait, and it is stopped with the gateway."""
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import threading
+
+from hub.core.errors import PlanthubError
+
+START_LIMIT = 20.0   # s for a server to bind its endpoint and build its address space
+CALL_LIMIT = 5.0     # s for anything else asked of it
+
+
+class ServerThread:
+    """Runs `protocol` (an object with async start(), publish(changed) and stop()) in a thread."""
+
+    def __init__(self, protocol, what: str):
+        self.protocol, self.what = protocol, what
+        self.loop = asyncio.new_event_loop()
+        self.thread = threading.Thread(target=self.loop.run_forever, name=what, daemon=True)
+
+    def __enter__(self):
+        self.thread.start()
+        try:
+            self.call(self.protocol.start(), START_LIMIT, "start")
+        except BaseException:
+            self.close()
+            raise
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def call(self, coroutine, limit: float = CALL_LIMIT, doing: str = "answer"):
+        future = asyncio.run_coroutine_threadsafe(coroutine, self.loop)
+        try:
+            return future.result(limit)
+        except concurrent.futures.TimeoutError:
+            future.cancel()
+            raise PlanthubError(f"the {self.what} did not {doing} within {limit:g} s") from None
+        except OSError as exc:
+            raise PlanthubError(f"the {self.what} could not {doing}: {exc}") from exc
+
+    def publish(self, changed: dict) -> None:
+        if changed:
+            self.call(self.protocol.publish(changed), doing="publish the plant's values")
+
+    def close(self) -> None:
+        if self.thread.is_alive():
+            try:
+                self.call(self.protocol.stop(), doing="stop")
+            except PlanthubError:
+                pass   # it is being torn down with its loop anyway
+            self.loop.call_soon_threadsafe(self.loop.stop)
+            self.thread.join(CALL_LIMIT)
+        if not self.thread.is_alive():
+            self.loop.close()

@@ -1,0 +1,31 @@
+"""The bottling plant's routing as a PLC program would run it, on the tag table `planthub gateway
+--export-tags` writes: at each new scan, for each reader whose event counter moved, pulse the
+switch's command into its lane (or back to base) for one scan; then write the scan back.
+The same decisions as modules/plant_control.py, on tags instead of slots."""
+from __future__ import annotations
+
+import csv
+
+
+def read_tags(path) -> dict:
+    with open(path, newline="") as f:
+        return {row["tag"]: row for row in csv.DictReader(f)}
+
+
+class Routing:
+    def __init__(self, lanes: list[str]):
+        self.lanes = lanes
+        self.seen = [0] * len(lanes)
+        self.decisions = 0
+
+    def scan(self, counts: list[int], destinations: list[str]) -> dict:
+        """The command bits of this scan (every one of them: a bit not set now is cleared)."""
+        bits = {}
+        for i, lane in enumerate(self.lanes, start=1):
+            moved = counts[i - 1] != self.seen[i - 1]
+            self.seen[i - 1] = counts[i - 1]
+            ours = destinations[i - 1] == lane
+            bits[f"sw{i}_work"] = moved and ours
+            bits[f"sw{i}_base"] = moved and not ours
+            self.decisions += moved
+        return bits
