@@ -1,0 +1,71 @@
+"""The bottling plant routed by an external PLC client process through `planthub gateway`, over OPC
+UA and over Modbus TCP, in lockstep: every bottle reaches its lane, and scanning at every step the
+run is bit for bit the run of the routing participant it stands in for (modules/plant_control.py,
+in the hub's process); scanning every 0.1 s (a PLC's usual scan) it still routes every bottle right."""
+import subprocess
+import sys
+
+import pytest
+
+from .gateway_support import export_tags, free_port, plc
+from .helpers import ROOT, run_scenario
+from .test_bottling_plant import LANES, SCENARIO, deliveries
+
+DURATION = 56.0   # s: by then every lane has had a bottle (tests/test_bottling_plant.py)
+LANE_ARGS = ("--lanes", "A,B,C,D,E")
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    out = tmp_path_factory.mktemp("participant")
+    run_scenario(SCENARIO, out, {"run.duration": DURATION, "objects.control.in_process": True})
+    return out
+
+
+def gateway_run(tmp_path, protocol, *gateway_args):
+    tags = tmp_path / "tags.csv"
+    export_tags(SCENARIO, "control", tags)
+    port = free_port()
+    endpoint = f"opc.tcp://127.0.0.1:{port}/planthub" if protocol == "opcua" else f"127.0.0.1:{port}"
+    launch = ["hub", "gateway", protocol, "bottling_plant.yaml", "--object", "control", "--endpoint", endpoint,
+              *gateway_args]
+    out = tmp_path / "run"
+    with plc(f"{protocol}_plc", tags, endpoint, *LANE_ARGS) as client:
+        proc = subprocess.run([sys.executable, "-m", "hub", "run", str(SCENARIO), "--out", str(out),
+                               "--set", f"run.duration={DURATION}",
+                               "--set", f"objects.control.python=[{', '.join(map(repr, launch))}]"],
+                              capture_output=True, text=True, cwd=ROOT, timeout=400)
+        plc_out, plc_err = client.communicate(timeout=30)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert client.returncode == 0, plc_err[-2000:]
+    return out, plc_out
+
+
+def every_bottle_in_its_lane(out):
+    from hub.scenario.checker import load_scenario
+    taken, misrouted = deliveries(load_scenario(SCENARIO), out)
+    assert not misrouted, f"misrouted (bottle, destination, sink): {misrouted}"
+    assert {sink for sink, _ in taken} == set(LANES) and len(taken) >= 8
+    return taken
+
+
+@pytest.mark.parametrize("protocol", ["opcua", "modbus"])
+def test_a_plc_over_the_gateway_routes_every_bottle_as_the_participant_does_bit_for_bit(tmp_path, protocol, reference):
+    out, plc_out = gateway_run(tmp_path, protocol)
+    every_bottle_in_its_lane(out)
+    scans = int(plc_out.split()[1])
+    assert scans == round(DURATION / 0.02)      # a scan at every communication step, each answered
+    assert (out / "recording.csv").read_bytes() == (reference / "recording.csv").read_bytes()
+    assert (out / "events.csv").read_bytes() == (reference / "events.csv").read_bytes()
+
+
+def test_a_plc_scanning_every_100_ms_over_modbus_routes_every_bottle(tmp_path, reference):
+    out, plc_out = gateway_run(tmp_path, "modbus", "--scan", "0.1")
+    taken = every_bottle_in_its_lane(out)
+    assert int(plc_out.split()[1]) == round(DURATION / 0.1)
+    assert taken == deliveries_of(reference)   # the same bottles to the same lanes, later by a scan at most
+
+
+def deliveries_of(out):
+    from hub.scenario.checker import load_scenario
+    return deliveries(load_scenario(SCENARIO), out)[0]
