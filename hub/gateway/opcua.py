@@ -91,6 +91,9 @@ class _CheckedWrites(AttributeService):
         for k, item in enumerate(params.NodesToWrite):
             tag = self.tags.get(item.NodeId)
             status = self._check(tag, item) if tag is not None and item.AttributeId == ua.AttributeIds.Value else None
+            if tag is None and not self._aspace.read_attribute_value(item.NodeId, ua.AttributeIds.NodeId).StatusCode.is_good():
+                status = ua.StatusCode(ua.StatusCodes.BadNodeIdUnknown)   # (asyncua would say access denied)
+                self.image.refuse(f"{item.NodeId.to_string()} (OPC UA)", "BadNodeIdUnknown: no such node")
             results.append(status)
             if status is None:
                 passed.append(k)

@@ -58,7 +58,6 @@ class Gateway(Participant):
         if held:
             cycle = self.cycle
             self.image.wait(lambda v: v["cycle_done"] == cycle, self.plc_timeout,
-                            f"the PLC did not answer scan {cycle} (t = {t:.6g} s: cycle_done still "
-                            f"{self.image.read('cycle_done')})")
+                            f"the PLC did not answer scan {cycle} (t = {t:.6g} s)")
         for slot, value in self.image.outputs().items():
             setattr(self, slot, value)

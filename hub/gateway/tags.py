@@ -254,28 +254,37 @@ def _override(tags: list[Tag], path: Path) -> list[Tag]:
 
 def _addresses(tags: list[Tag], path: Path | None) -> list[Tag]:
     """Modbus addresses: each tag in its table in order, after any fixed by the overrides; overlaps refused."""
-    fixed = {}
+    fixed, lines = {}, {}
     if path is not None:
-        data, _, _ = load_yaml(path)
+        data, lines, _ = load_yaml(path)
         fixed = {slot: change["address"] for slot, change in data["tags"].items() if "address" in change}
-    used, out, names = {}, [], {}
-    for tag in tags:
+
+    def wrong(slot, key, message):
+        place = ("tags", slot, key)
+        return PlanthubError(str(Problem(str(path), line_of(lines, place) or line_of(lines, place[:2]),
+                                         format_path(place), message)))
+
+    renamed = {slot for slot, change in (data["tags"].items() if path is not None else ()) if "name" in change}
+    names = {}
+    for tag in sorted(tags, key=lambda t: t.slot in renamed):   # a renamed one is the one named
         if tag.name in names:
-            raise PlanthubError(f"{path}: tags.{tag.slot}.name: {tag.name!r} is also the name of {names[tag.name]!r}")
+            raise wrong(tag.slot, "name", f"{tag.name!r} is already the name of {names[tag.name]!r}")
         names[tag.name] = tag.slot
+    owners, out = {}, []
     for tag in sorted(tags, key=lambda t: t.slot not in fixed):   # fixed ones first, then in order
-        taken = used.setdefault(tag.table, set())
+        taken = owners.setdefault(tag.table, {})
         start = fixed.get(tag.slot)
         if start is None:
             start = 0
             while any(a in taken for a in range(start, start + tag.count)):
                 start += 1
-        clash = [a for a in range(start, start + tag.count) if a in taken]
-        if clash or start + tag.count > 65536:
-            raise PlanthubError(f"{path}: tags.{tag.slot}.address: {tag.table} {start}..{start + tag.count - 1} "
-                                f"overlaps another tag's" if clash else f"{path}: tags.{tag.slot}.address: "
-                                f"{start} + {tag.count} runs past 65535")
-        taken.update(range(start, start + tag.count))
+        span = range(start, start + tag.count)
+        clash = sorted({taken[a] for a in span if a in taken})
+        if clash:
+            raise wrong(tag.slot, "address", f"{tag.table} {start}..{span[-1]} overlaps {', '.join(clash)}")
+        if span[-1] > 65535:
+            raise wrong(tag.slot, "address", f"{tag.table} {start}..{span[-1]} runs past 65535")
+        taken.update({a: tag.slot for a in span})
         out.append(replace(tag, address=start))
     order = {t.slot: k for k, t in enumerate(tags)}
     return sorted(out, key=lambda t: order[t.slot])
