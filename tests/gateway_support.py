@@ -3,11 +3,15 @@ object, and a PLC client process (tests/plc/) that is always stopped."""
 from __future__ import annotations
 
 import contextlib
+import json
 import socket
 import subprocess
 import sys
 
 from .helpers import ROOT
+
+BOTTLING = ROOT / "scenarios" / "bottling_plant.yaml"
+LANES = ("--lanes", "A,B,C,D,E")
 
 
 def free_port() -> int:
@@ -37,3 +41,29 @@ def plc(module: str, *args, limit: float = 240.0):
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.communicate()
+
+
+def bottling_via_gateway(tmp, protocol: str | None, duration: float, *gateway_args):
+    """The bottling plant for `duration` s, routed by a PLC client process through `planthub gateway
+    PROTOCOL` (None: by the routing participant over Zenoh, as `make run` does); (run folder, the
+    PLC's last line, summary.json)."""
+    out, sets, client = tmp / "run", [f"run.duration={duration}"], contextlib.nullcontext()
+    if protocol is not None:
+        tags = tmp / "tags.csv"
+        export_tags(BOTTLING, "control", tags)
+        port = free_port()
+        endpoint = f"opc.tcp://127.0.0.1:{port}/planthub" if protocol == "opcua" else f"127.0.0.1:{port}"
+        launch = ["hub", "gateway", protocol, "bottling_plant.yaml", "--object", "control", "--endpoint", endpoint,
+                  *gateway_args]
+        sets.append(f"objects.control.python=[{', '.join(map(repr, launch))}]")
+        client = plc(f"{protocol}_plc", tags, endpoint, *LANES)
+    with client as proc:
+        run = subprocess.run([sys.executable, "-m", "hub", "run", str(BOTTLING), "--out", str(out),
+                              *[a for s in sets for a in ("--set", s)]],
+                             capture_output=True, text=True, cwd=ROOT, timeout=600)
+        said = ""
+        if proc is not None:
+            said, err = proc.communicate(timeout=30)
+            assert proc.returncode == 0, err[-2000:]
+    assert run.returncode == 0, run.stderr[-3000:]
+    return out, said.strip(), json.loads((out / "summary.json").read_text())

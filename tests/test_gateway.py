@@ -340,3 +340,34 @@ def test_live_mode_a_plc_sets_the_belt_running_against_the_wall_clock(tmp_path):
         rows = list(csv.DictReader(f))
     assert float(rows[0]["belt.drive.velocity"]) == 0.0
     assert float(rows[-1]["belt.drive.velocity"]) == pytest.approx(0.5)   # the PLC's set-point, taken live
+
+
+def test_an_opc_ua_client_subscribes_to_a_sensor_with_its_own_sampling_interval(tmp_path):
+    from hub.gateway.opcua import OpcUaServer
+    tags = tag_map(load_scenario(belt_scenario(tmp_path)), "plc", None)
+    image = ProcessImage(tags)
+    endpoint = f"opc.tcp://127.0.0.1:{free_port()}/planthub"
+
+    class Seen:
+        def __init__(self):
+            self.values = asyncio.Queue()
+
+        def datachange_notification(self, node, value, data):
+            self.values.put_nowait(value)
+
+    with ServerThread(OpcUaServer(image, endpoint), "opcua") as thread:
+        async def client_side():
+            async with Client(endpoint, timeout=5) as client:
+                ns = await client.get_namespace_index("urn:planthub:belt_plc")
+                seen = Seen()
+                subscription = await client.create_subscription(20, seen)
+                await subscription.subscribe_data_change(client.get_node(ua.NodeId("barrier.who", ns)),
+                                                         sampling_interval=10)
+                first = await asyncio.wait_for(seen.values.get(), 5)      # the value it has now
+                image.put({"who": "M007"})
+                await asyncio.to_thread(thread.publish, image.take_changed())
+                second = await asyncio.wait_for(seen.values.get(), 5)
+                return first, second, subscription.parameters.RequestedPublishingInterval
+
+        first, second, interval = asyncio.run(client_side())
+    assert (first, second, interval) == ("", "M007", 20)

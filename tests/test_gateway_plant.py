@@ -2,17 +2,13 @@
 UA and over Modbus TCP, in lockstep: every bottle reaches its lane, and scanning at every step the
 run is bit for bit the run of the routing participant it stands in for (modules/plant_control.py,
 in the hub's process); scanning every 0.1 s (a PLC's usual scan) it still routes every bottle right."""
-import subprocess
-import sys
-
 import pytest
 
-from .gateway_support import export_tags, free_port, plc
-from .helpers import ROOT, run_scenario
+from .gateway_support import bottling_via_gateway
+from .helpers import run_scenario
 from .test_bottling_plant import LANES, SCENARIO, deliveries
 
 DURATION = 56.0   # s: by then every lane has had a bottle (tests/test_bottling_plant.py)
-LANE_ARGS = ("--lanes", "A,B,C,D,E")
 
 
 @pytest.fixture(scope="module")
@@ -23,22 +19,8 @@ def reference(tmp_path_factory):
 
 
 def gateway_run(tmp_path, protocol, *gateway_args):
-    tags = tmp_path / "tags.csv"
-    export_tags(SCENARIO, "control", tags)
-    port = free_port()
-    endpoint = f"opc.tcp://127.0.0.1:{port}/planthub" if protocol == "opcua" else f"127.0.0.1:{port}"
-    launch = ["hub", "gateway", protocol, "bottling_plant.yaml", "--object", "control", "--endpoint", endpoint,
-              *gateway_args]
-    out = tmp_path / "run"
-    with plc(f"{protocol}_plc", tags, endpoint, *LANE_ARGS) as client:
-        proc = subprocess.run([sys.executable, "-m", "hub", "run", str(SCENARIO), "--out", str(out),
-                               "--set", f"run.duration={DURATION}",
-                               "--set", f"objects.control.python=[{', '.join(map(repr, launch))}]"],
-                              capture_output=True, text=True, cwd=ROOT, timeout=400)
-        plc_out, plc_err = client.communicate(timeout=30)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    assert client.returncode == 0, plc_err[-2000:]
-    return out, plc_out
+    out, said, _ = bottling_via_gateway(tmp_path, protocol, DURATION, *gateway_args)
+    return out, said
 
 
 def every_bottle_in_its_lane(out):
