@@ -54,7 +54,8 @@ class Gateway(Participant):
             self.cycle = (self.cycle + 1) % 65536
             values["cycle"] = self.cycle
         self.image.put(values)
-        self.server.publish(self.image.take_changed())
+        if held or self.mode == LIVE:   # in lockstep the PLC reads only at a scan: what changed in between goes then
+            self.server.publish(self.image.take_changed())
         if held:
             cycle = self.cycle
             self.image.wait(lambda v: v["cycle_done"] == cycle, self.plc_timeout,
