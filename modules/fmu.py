@@ -2,8 +2,17 @@
 
 | slot           | type        | dir    | meaning                                                  |
 |----------------|-------------|--------|----------------------------------------------------------|
-| logic.<input>  | the input's | target | each FMU input variable (Real, Integer, Boolean, String) |
+| logic.<input>  | the input's | target | each FMU input variable; it holds the FMU's start value  |
+|                |             |        | until a flow writes it                                   |
 | logic.<output> | the output's| source | each FMU output variable, active every step              |
+
+Slot types by FMI type: Real, Float32/64 → real; Integer, Int8…64, UInt8…64, Enumeration → int
+(its range checked on every write); Boolean → bool; String → string; Binary → string of hex;
+an FMI 3 array → one slot per element (`u_0`, `A_0_1`); clocks and structural parameters are not
+mapped (`planthub check-fmu` and `validate` list them, with the reason). `parameters` sets any
+variable FMI lets a user set before initialisation — parameters, and inputs and other variables
+with a start value — by name (an array also by its own name, as a list), checked against the
+variable's type, min/max and enumeration items (an Enumeration also by an item's name).
 
 Variables named in `events` become void slots: a void target sets the Boolean input true in
 the steps a flow fed it (false otherwise); a Boolean output true makes the void source fire.
@@ -29,6 +38,7 @@ from hub.bus.tls import LAUNCHED_SCHEMA, launched_problems
 from hub.logic.component import LogicComponent
 from hub.logic.factory import SlavePlan, make_slave
 from hub.logic.fmi import FmuError, inspect_fmu
+from hub.logic.fmi_variables import parameter_problems, parameter_values
 from hub.logic.ports import fmu_ports
 from hub.core.logic_spec import own_step_problems
 from hub.core.module import Module
@@ -46,7 +56,8 @@ class Fmu(Module):
         "properties": {
             "file": {"type": "string", "x-path": True, "description": "the .fmu, relative to the scenario file"},
             "parameters": {"type": "object", "default": {},
-                           "description": "values of the FMU's parameters, by variable name"},
+                           "description": "start values of the FMU's variables, by name: parameters, and inputs "
+                                          "and other variables FMI lets a user set before initialisation"},
             "events": {"type": "array", "items": {"type": "string"}, "uniqueItems": True, "default": [],
                        "description": "Boolean inputs/outputs to expose as void (event) slots"},
             "map": {"type": "object", "additionalProperties": {"type": "string", "pattern": _SLOT_NAME.pattern},
@@ -91,16 +102,8 @@ class Fmu(Module):
                                        "the bus; one that joins presents its own (serve-fmu --tls-cert, --tls-key)"))
         variables = fmu.variables
         ports = {v.name for v in fmu.of("input") + fmu.of("output")}
-        tunable = {v.name: v for v in fmu.of("parameter")}
-        for name, value in params["parameters"].items():
-            if name not in tunable:
-                problems.append((("parameters", name), f"{fmu.path.name} has no parameter {name!r}"
-                                 f"{did_you_mean(name, tunable)}"))
-                continue
-            try:
-                tunable[name].type.coerce(value)
-            except ValueError as exc:
-                problems.append((("parameters", name), f"{name} is {tunable[name].fmi_type}: {exc}"))
+        problems += [(("parameters", name), message) for name, message in
+                     parameter_problems(fmu.path.name, variables, fmu.unmapped, params["parameters"])]
         for i, name in enumerate(params["events"]):
             if name not in ports:
                 problems.append((("events", i), f"{fmu.path.name} has no input or output {name!r}"
@@ -116,6 +119,15 @@ class Fmu(Module):
             if not _SLOT_NAME.match(slot):
                 problems.append((("map",), f"variable {v.name!r} needs a slot name: add `{v.name}: some_name` to map"))
         return problems
+
+    @classmethod
+    def notes(cls, params):
+        """What the hub can live with but a user should know: the FMU's variables without a slot."""
+        try:
+            fmu = inspect_fmu(params["file"])
+        except FmuError:
+            return []
+        return [(("file",), f"{fmu.path.name}: {name} is not mapped: {why}") for name, why in fmu.unmapped]
 
     @classmethod
     def check_run(cls, params, run):
@@ -152,7 +164,11 @@ class Fmu(Module):
         ports = fmu_ports(fmu, params["events"], params["map"])
         inputs = [(s, v) for s, v in ports if fmu.variables[v].causality == "input"]
         outputs = [(s, v) for s, v in ports if fmu.variables[v].causality == "output"]
-        parameters = {k: fmu.variables[k].type.coerce(v) for k, v in params["parameters"].items()}
+        parameters = parameter_values(fmu.variables, params["parameters"])
+        # An input no flow feeds keeps the FMU's start value (or the scenario's, from `parameters`):
+        # its slot starts there, and the hub writes it back unchanged until a flow changes it.
+        starts = {s.name: parameters.get(v, fmu.variables[v].start) for s, v in inputs
+                  if s.type is not SlotType.VOID and parameters.get(v, fmu.variables[v].start) is not None}
         launch = params.get("participant") == "launch"
         own = (params["tls"]["certificate"], params["tls"]["key"]) if "tls" in params else None
         spec = RemoteSpec(name, tuple((s.name, s.type) for s, _ in inputs), tuple((s.name, s.type) for s, _ in outputs),
@@ -166,4 +182,4 @@ class Fmu(Module):
         every = round(params["step"] * world.rate) if "step" in params else None
         return {"logic": LogicComponent(name, "logic", tuple(s for s, _ in ports), slave,
                                         as_pairs(inputs), as_pairs(outputs), world.rate, every,
-                                        params["on_bad_value"])}
+                                        params["on_bad_value"], starts)}

@@ -122,7 +122,7 @@ def test_unknown_parameter_event_and_type_mismatch(fmus, write_scenario):
     drive = f"file: {fmus / 'belt_drive-fmi2.fmu'}, parameters: {{rampe: 1, }}, events: [speed]"
     path = scene(write_scenario, drive)
     assert problems(path) == [
-        f"{path}:4: objects.drive.parameters.rampe: belt_drive-fmi2.fmu has no parameter 'rampe' "
+        f"{path}:4: objects.drive.parameters.rampe: belt_drive-fmi2.fmu has no variable 'rampe' that can be set "
         f"(did you mean 'ramp'?)",
         f"{path}:4: objects.drive.events[0]: speed is Real; only a Boolean can be an event",
     ]

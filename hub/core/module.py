@@ -65,6 +65,11 @@ class Module:
         return []
 
     @classmethod
+    def notes(cls, params: dict) -> list[tuple[tuple, str]]:
+        """Findings a run can live with but a user should hear of at `validate` (path, message)."""
+        return []
+
+    @classmethod
     def check_run(cls, params: dict, run) -> list[tuple[tuple, str]]:
         """Problems of these parameters under the scenario's run settings (`RunSettings`)."""
         return []

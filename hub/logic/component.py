@@ -27,7 +27,7 @@ class LogicComponent(Component):
     """
 
     def __init__(self, obj, name, slots, slave, inputs, outputs, rate: int, every: int | None,
-                 on_bad_value: str = "stop"):
+                 on_bad_value: str = "stop", starts: dict | None = None):
         super().__init__(obj, name)
         self.SLOTS = slots
         self.slave = slave
@@ -46,12 +46,15 @@ class LogicComponent(Component):
         self._numeric = tuple((k, slot, kinds[slot] is SlotType.REAL) for k, (slot, event) in enumerate(outputs)
                               if not event and kinds[slot] in numeric)
         self.bad_values = 0       # non-finite outputs held (on_bad_value: hold)
+        self.starts = starts or {}   # input slot → the value it holds until a flow writes it
 
     def bind(self, signals, index, needed):
         super().bind(signals, index, needed)
         # Slot numbers resolved once: sense and step run at every point for every logic object.
         self._reads = tuple((index[slot], event) for slot, event in self.inputs)
         self._writes = tuple((index[slot], event) for slot, event in self.outputs)
+        for slot, value in self.starts.items():   # the logic's own start values, not the type's zero
+            signals.values[index[slot]] = value
 
     def _fetch(self, tick: int) -> None:
         outputs = self.slave.outputs()

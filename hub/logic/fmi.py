@@ -21,14 +21,8 @@ from fmpy.fmi3 import FMU3Slave
 from hub.core import scratch
 from hub.core.errors import PlanthubError, SimulationError
 from hub.core.slots import SlotType
+from hub.logic.fmi_variables import FmuVariable, map_variables
 
-# FMI type names (2.0 and 3.0) → slot types. Anything else stays unmapped.
-_TYPES = {
-    "Real": SlotType.REAL, "Float64": SlotType.REAL,
-    "Integer": SlotType.INT, "Int32": SlotType.INT, "Enumeration": SlotType.INT,
-    "Boolean": SlotType.BOOL,
-    "String": SlotType.STRING,
-}
 # Where each FMI version keeps this platform's binary.
 _PLATFORM = {"2.0": "linux64", "3.0": "x86_64-linux"}
 _STATUS = ["ok", "warning", "discard", "error", "fatal", "pending"]
@@ -40,19 +34,9 @@ class FmuError(PlanthubError):
 
 
 @dataclass(frozen=True)
-class FmuVariable:
-    name: str
-    type: SlotType
-    causality: str          # input, output, parameter, …
-    vr: int
-    fmi_type: str
-    start: object = None
-    description: str = ""
-
-
-@dataclass(frozen=True)
 class FmuInterface:
-    """What a scenario check needs of an FMU: its version, identity and mappable variables."""
+    """What a scenario check needs of an FMU: its version, identity, its variables as slots
+    (hub/logic/fmi_variables.py: array elements one each) and what is not mapped, with the reason."""
 
     path: Path
     fmi_version: str
@@ -61,6 +45,7 @@ class FmuInterface:
     guid: str
     variables: dict[str, FmuVariable]
     variable_steps: bool       # canHandleVariableCommunicationStepSize
+    unmapped: tuple[tuple[str, str], ...] = ()   # (variable, why it has no slot)
 
     def of(self, causality: str) -> list[FmuVariable]:
         return [v for v in self.variables.values() if v.causality == causality]
@@ -95,9 +80,10 @@ def _read_interface(path: Path) -> FmuInterface:
             raise FmuError(f"{path}: no modelDescription.xml in the archive")
         try:
             # The version decides which schema applies, so read it before fmpy validates.
-            version = ElementTree.fromstring(archive.read("modelDescription.xml")).get("fmiVersion", "")
+            root = ElementTree.fromstring(archive.read("modelDescription.xml"))
         except ElementTree.ParseError as exc:
             raise FmuError(f"{path}: modelDescription.xml is not XML: {exc}") from None
+    version = root.get("fmiVersion", "")
     if version not in _PLATFORM:
         raise FmuError(f"{path}: FMI {version or '(no fmiVersion)'} is not supported "
                        f"(planthub loads FMI 2.0 and 3.0 co-simulation FMUs)")
@@ -106,21 +92,27 @@ def _read_interface(path: Path) -> FmuInterface:
     except Exception as exc:  # fmpy reports schema and XML problems with several exception types
         raise FmuError(f"{path}: modelDescription.xml is not valid: {exc}") from None
     if md.coSimulation is None:
+        if getattr(md, "scheduledExecution", None) is not None:
+            raise FmuError(f"{path}: scheduled execution: not supported (the FMU offers no co-simulation "
+                           f"interface{', only scheduled execution and model exchange' if md.modelExchange else ''}; "
+                           f"planthub needs a co-simulation FMU)")
         raise FmuError(f"{path}: model exchange only; planthub needs a co-simulation FMU")
     identifier = md.coSimulation.modelIdentifier
     binary = f"binaries/{_PLATFORM[version]}/{identifier}.so"
     if binary not in names:
         found = sorted({n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") >= 2})
         raise FmuError(f"{path}: no binary for this platform ({binary}); the FMU has: {', '.join(found) or 'none'}")
-    variables = {}
-    for v in md.modelVariables:
-        kind = _TYPES.get(v.type)
-        if kind is None or v.shape:
-            continue   # arrays, clocks and other types are not mapped to slots
-        variables[v.name] = FmuVariable(v.name, kind, v.causality, v.valueReference, v.type,
-                                        v.start, v.description or "")
+    # fmpy keeps no min/max of UInt types nor a Binary's maxSize: the XML's own attributes fill in.
+    listed = root.find("ModelVariables")
+    attributes = {}
+    for element in (listed if listed is not None else ()):
+        typed = element if version == "3.0" else next(iter(element), None)
+        if element.get("name") is not None and typed is not None:
+            attributes[element.get("name")] = dict(typed.attrib)
+    variables, unmapped = map_variables(md.modelVariables, attributes, version == "2.0")
     variable_steps = bool(md.coSimulation.canHandleVariableCommunicationStepSize)
-    return FmuInterface(path, version, md.modelName, identifier, md.guid, variables, variable_steps)
+    return FmuInterface(path, version, md.modelName, identifier, md.guid, variables, variable_steps,
+                        tuple(unmapped))
 
 
 def validate(path: Path) -> list[str]:
@@ -177,13 +169,17 @@ class FmuSlave:
             self._instantiate()
             self._in = _Batches(self._fmu, self._v2, [interface.variables[n] for n in inputs])
             self._out = _Batches(self._fmu, self._v2, [interface.variables[n] for n in outputs])
+            parameters = _whole_arrays(interface, parameters)
             params = _Batches(self._fmu, self._v2, [interface.variables[n] for n in parameters])
+            # Set once instantiated, before initialisation: where FMI 2 and 3 let a user set every
+            # variable with initial exact or approx (hub/logic/fmi_variables.py FmuVariable.settable).
             if self._v2:
                 self._call("setupExperiment", self._fmu.setupExperiment, startTime=start_time)
+            self._call("set parameters", params.set, list(parameters.values()))
+            if self._v2:
                 self._call("enterInitializationMode", self._fmu.enterInitializationMode)
             else:
                 self._call("enterInitializationMode", self._fmu.enterInitializationMode, startTime=start_time)
-            self._call("set parameters", params.set, list(parameters.values()))
             self._call("exitInitializationMode", self._fmu.exitInitializationMode)
             if self._v2:
                 self._raw_do_step, self._do_step = _raw(self._fmu, "fmi2DoStep"), self._do_step_2
@@ -285,39 +281,102 @@ _libc.calloc.argtypes = [ctypes.c_size_t, ctypes.c_size_t]
 _libc.free.argtypes = [ctypes.c_void_p]
 
 
+def _whole_arrays(interface: FmuInterface, parameters: dict) -> dict:
+    """FMI 3 writes an array whole: elements a scenario leaves out keep their start values."""
+    out = dict(parameters)
+    for name in parameters:
+        array = interface.variables[name].array
+        if array:
+            for element in interface.variables.values():
+                if element.array == array:
+                    out.setdefault(element.name, element.start)
+    return out
+
+
+def probe(interface: FmuInterface) -> str | None:
+    """Load the FMU's binary, instantiate and initialise it with its start values, and free it:
+    None if that works, else why not (what check-fmu calls "cannot load")."""
+    try:
+        FmuSlave(interface, "check-fmu", [], [], {}, step_timeout=30.0).close()
+    except SimulationError as exc:
+        return str(exc)
+    except Exception as exc:   # the shared library does not load (a missing symbol, another platform)
+        return f"its binary does not load: {exc}"
+    return None
+
+
 class _Batches:
-    """Variables grouped by FMI type, each group with ready value-reference and value arrays."""
+    """Variables grouped by FMI type, each group with ready value-reference and value arrays.
+
+    An FMI 3 array is one value reference with many values: its elements sit side by side in
+    the group's value array, in FMI's row-major order. Integers are checked against their
+    range before they are written (a C integer would wrap silently); a Binary travels as hex.
+    """
 
     def __init__(self, fmu, v2: bool, variables: list[FmuVariable]):
         self.fmu = fmu
         self.count = len(variables)
+        self.variables = variables
         self.groups = []
         families = _FAMILY2 if v2 else _FAMILY3
         for fmi_type in dict.fromkeys(v.fmi_type for v in variables):
             members = [i for i, v in enumerate(variables) if v.fmi_type == fmi_type]
             family, ctype = families[fmi_type]
-            vrs = (ctypes.c_uint32 * len(members))(*(variables[i].vr for i in members))
-            values = (ctype * len(members))()
+            sizes = dict.fromkeys(variables[i].vr for i in members)
+            start = 0
+            for vr in sizes:
+                size = next(variables[i].size for i in members if variables[i].vr == vr)
+                sizes[vr], start = start, start + size
+            positions = [sizes[variables[i].vr] + variables[i].element for i in members]
+            vrs = (ctypes.c_uint32 * len(sizes))(*sizes)
+            values = (ctype * start)()
             prefix = "fmi2" if v2 else "fmi3"
-            # FMI 3 getters and setters also take the number of values (arrays may differ).
-            extra = () if v2 else (len(members),)
             get, set_ = f"{prefix}Get{family}", f"{prefix}Set{family}"
-            self.groups.append((members, variables[members[0]].type, vrs, values, extra,
+            kind = variables[members[0]].type
+            checked = kind is SlotType.INT or fmi_type == "Binary"
+            binary = (ctypes.c_size_t * start)() if fmi_type == "Binary" else None
+            self.groups.append((members, positions, kind, checked, binary, vrs, values, start,
                                 get, _raw(fmu, get), set_, _raw(fmu, set_)))
+        self._v2 = v2
 
     def set(self, values: list) -> None:
         component = self.fmu.component
-        for members, kind, vrs, buf, extra, _, _, name, setter in self.groups:
-            for k, i in enumerate(members):
+        for members, positions, kind, checked, binary, vrs, buf, n, _, _, name, setter in self.groups:
+            if checked:
+                for i in members:
+                    try:
+                        self.variables[i].check(values[i])
+                    except ValueError as exc:
+                        v = self.variables[i]
+                        raise ValueError(f"{v.causality} {v.name!r} ({v.fmi_type}): {exc}") from None
+            if binary is not None:
+                keep = [bytes.fromhex(values[i]) for i in members]   # alive until the call returns
+                for k, data in zip(positions, keep):
+                    buf[k] = ctypes.cast(ctypes.c_char_p(data), ctypes.POINTER(ctypes.c_uint8))
+                    binary[k] = len(data)
+                _check(name, setter(component, vrs, len(vrs), binary, buf, n))
+                continue
+            for k, i in zip(positions, members):
                 buf[k] = _to_c(kind, values[i])
-            _check(name, setter(component, vrs, len(vrs), buf, *extra))
+            if self._v2:
+                _check(name, setter(component, vrs, len(vrs), buf))
+            else:   # FMI 3 getters and setters also take the number of values (arrays may differ)
+                _check(name, setter(component, vrs, len(vrs), buf, n))
 
     def get(self) -> list:
         out = [None] * self.count
         component = self.fmu.component
-        for members, kind, vrs, buf, extra, name, getter, _, _ in self.groups:
-            _check(name, getter(component, vrs, len(vrs), buf, *extra))
-            for k, i in enumerate(members):
+        for members, positions, kind, _, binary, vrs, buf, n, name, getter, _, _ in self.groups:
+            if binary is not None:
+                _check(name, getter(component, vrs, len(vrs), binary, buf, n))
+                for k, i in zip(positions, members):
+                    out[i] = ctypes.string_at(buf[k], binary[k]).hex() if buf[k] else ""
+                continue
+            if self._v2:
+                _check(name, getter(component, vrs, len(vrs), buf))
+            else:
+                _check(name, getter(component, vrs, len(vrs), buf, n))
+            for k, i in zip(positions, members):
                 out[i] = _from_c(kind, buf[k])
         return out
 
@@ -333,16 +392,21 @@ def _check(function: str, status: int) -> None:
         raise FMICallException(function=function, status=status)
 
 
-# FMI type → (function family, C type), per FMI version.
+# FMI type → (function family, C type), per FMI version. An Enumeration is written with the
+# Integer functions in FMI 2 and the Int64 ones in FMI 3, as each standard says.
 _FAMILY2 = {
     "Real": ("Real", ctypes.c_double), "Integer": ("Integer", ctypes.c_int32),
     "Enumeration": ("Integer", ctypes.c_int32), "Boolean": ("Boolean", ctypes.c_int32),
     "String": ("String", ctypes.c_char_p),
 }
 _FAMILY3 = {
-    "Float64": ("Float64", ctypes.c_double), "Int32": ("Int32", ctypes.c_int32),
+    "Float64": ("Float64", ctypes.c_double), "Float32": ("Float32", ctypes.c_float),
+    "Int8": ("Int8", ctypes.c_int8), "UInt8": ("UInt8", ctypes.c_uint8),
+    "Int16": ("Int16", ctypes.c_int16), "UInt16": ("UInt16", ctypes.c_uint16),
+    "Int32": ("Int32", ctypes.c_int32), "UInt32": ("UInt32", ctypes.c_uint32),
+    "Int64": ("Int64", ctypes.c_int64), "UInt64": ("UInt64", ctypes.c_uint64),
     "Enumeration": ("Int64", ctypes.c_int64), "Boolean": ("Boolean", ctypes.c_bool),
-    "String": ("String", ctypes.c_char_p),
+    "String": ("String", ctypes.c_char_p), "Binary": ("Binary", ctypes.POINTER(ctypes.c_uint8)),
 }
 
 

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from hub.logic.fmi import FmuSlave, inspect_fmu
+from hub.logic.fmi_variables import parameter_values
 from hub.logic.ports import fmu_ports
 from hub.bus.participant import Participant
 from hub.bus import wire
@@ -25,8 +26,7 @@ class FmuParticipant(Participant):
         return [(n, k) for n, k, _ in self.ports_in], [(n, k) for n, k, _ in self.ports_out]
 
     def begin(self, parameters: dict, time: float) -> None:
-        variables = self.fmu.variables
-        values = {name: variables[name].type.coerce(value) for name, value in parameters.items()}
+        values = parameter_values(self.fmu.variables, parameters)   # checked as the hub checked them
         self.slave = FmuSlave(self.fmu, self.instance, [v for _, _, v in self.ports_in],
                               [v for _, _, v in self.ports_out], values, time)
 
