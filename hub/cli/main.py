@@ -157,6 +157,10 @@ def _validate(args) -> int:
     run = scenario.run
     print(f"{args.scenario}: ok — {len(scenario.objects)} objects, {len(scenario.flows)} flows, "
           f"{len(scenario.record)} recorded slots, {run.end_tick / run.physics_rate:g} s at {run.physics_rate} Hz")
+    for obj in scenario.objects:   # what the run can live with, said before anyone runs it
+        for module, params, where in ((obj.module, obj.params, obj.name), (obj.logic_module, obj.logic, f"{obj.name}.logic")):
+            for place, note in (module.notes(params) if module is not None and params is not None else ()):
+                _log.warning("planthub: warning: objects.%s: %s", ".".join((where, *map(str, place))), note)
     if run.bus is not None:
         from hub.bus.settings import exposure
 
@@ -181,20 +185,41 @@ def _report(args) -> int:
 
 
 def _check_fmu(args) -> int:
+    """Blockers (it cannot load, has no co-simulation interface, no binary for this platform, or
+    cannot replace --like's FMU) → ✗ and exit 1; findings the hub can live with (fmpy's
+    validation notes, variables without a slot) → ! warnings, exit 0."""
     from hub.logic.fmi import compare, inspect_fmu, validate
+    from hub.logic.isolated import probe
 
-    fmu = inspect_fmu(args.fmu)   # an FmuError (no such file, no FMU): exit 1
+    fmu = inspect_fmu(args.fmu)   # an FmuError (no such file, no FMU, no interface, no binary): exit 1
     reference = inspect_fmu(args.like) if args.like else None
     print(f"{args.fmu}: FMI {fmu.fmi_version} co-simulation, model {fmu.model_name!r}")
-    for causality, label in (("input", "target slots"), ("output", "source slots"), ("parameter", "parameters")):
-        names = ", ".join(f"{v.name} ({v.type.value})" for v in fmu.of(causality)) or "none"
-        print(f"  {label:<13} {names}")
-    problems = [f"validation: {p}" for p in validate(args.fmu)]
+    settable = [v for v in fmu.variables.values() if v.causality != "input" and v.settable() is None]
+    for label, variables in (("target slots", fmu.of("input")), ("source slots", fmu.of("output")),
+                             ("settable", settable)):
+        print(f"  {label:<13} {', '.join(v.summary() for v in variables) or 'none'}")
+    if fmu.of("input"):
+        print("  (an input no flow feeds keeps its start value; `parameters:` sets inputs too)")
+    warnings = [f"not mapped: {name}: {why}" for name, why in fmu.unmapped]
+    warnings += [f"validation: {p}" for p in validate(args.fmu)]
+    if not fmu.of("input") and not fmu.of("output"):
+        warnings.append("no inputs or outputs: nothing a flow can connect")
+    blockers = []
+    failed = probe(fmu)
+    if failed is not None:
+        blockers.append(f"cannot load: {failed}")
     if reference is not None:
-        problems += compare(fmu, reference)
-    for problem in problems:
-        print(f"  ✗ {problem}")
-    if not problems:
-        fits = f"; fits in place of {args.like}" if reference is not None else ""
+        blockers += compare(fmu, reference)
+    for warning in warnings:
+        print(f"  ! {warning}")
+    for blocker in blockers:
+        print(f"  ✗ {blocker}")
+    if blockers:
+        return FAILED
+    fits = f"; fits in place of {args.like}" if reference is not None else ""
+    if warnings:
+        count = f"{len(warnings)} warning{'s' if len(warnings) > 1 else ''}"
+        print(f"  ✓ usable, with {count} (above){fits}")
+    else:
         print(f"  ✓ passes fmpy's validation{fits}")
-    return FAILED if problems else OK
+    return OK

@@ -163,8 +163,9 @@ class FmuSlave:
         try:
             extract(str(interface.path), str(self._dir))
             cls = FMU2Slave if interface.fmi_version == "2.0" else FMU3Slave
-            self._fmu = cls(guid=interface.guid, unzipDirectory=str(self._dir),
-                            modelIdentifier=interface.identifier, instanceName=instance)
+            # A binary that does not load (a missing symbol, another platform) is named like a failing call.
+            self._fmu = self._call("load the binary", cls, guid=interface.guid, unzipDirectory=str(self._dir),
+                                   modelIdentifier=interface.identifier, instanceName=instance)
             self._v2 = interface.fmi_version == "2.0"
             self._instantiate()
             self._in = _Batches(self._fmu, self._v2, [interface.variables[n] for n in inputs])
@@ -291,18 +292,6 @@ def _whole_arrays(interface: FmuInterface, parameters: dict) -> dict:
                 if element.array == array:
                     out.setdefault(element.name, element.start)
     return out
-
-
-def probe(interface: FmuInterface) -> str | None:
-    """Load the FMU's binary, instantiate and initialise it with its start values, and free it:
-    None if that works, else why not (what check-fmu calls "cannot load")."""
-    try:
-        FmuSlave(interface, "check-fmu", [], [], {}, step_timeout=30.0).close()
-    except SimulationError as exc:
-        return str(exc)
-    except Exception as exc:   # the shared library does not load (a missing symbol, another platform)
-        return f"its binary does not load: {exc}"
-    return None
 
 
 class _Batches:

@@ -77,6 +77,8 @@ class FmuVariable:
             return "it is the independent variable (time)"
         if self.causality == "calculatedParameter":
             return "it is a calculated parameter: the FMU computes it from others"
+        if self.causality == "output":
+            return "it is an output: the FMU computes it"
         if self.variability == "constant":
             return "it is a constant"
         if self.initial == "calculated":
@@ -120,7 +122,7 @@ class FmuVariable:
         parts = [self.type.value if self.fmi_type in ("Real", "Float64", "Integer", "Int32", "Boolean", "String")
                  else f"{self.type.value} from {self.fmi_type}"]
         if self.start is not None:
-            parts.append(f"start {self.start!r}" if self.type is SlotType.STRING else f"start {self.start}")
+            parts.append(f"start {_shown(self.type, self.start)}")
         if self.items:
             parts.append(f"items {self.item_list()}")
         elif self.type in (SlotType.INT, SlotType.REAL) and (self.low, self.high) != _WIDTHS.get(self.fmi_type) \
@@ -128,6 +130,15 @@ class FmuVariable:
                 and (self.low is not None or self.high is not None):
             parts.append(self.range_text())
         return f"{self.name} ({', '.join(parts)})"
+
+
+def _shown(kind: SlotType, value) -> str:
+    """A value as a scenario writes it."""
+    if kind is SlotType.BOOL:
+        return "true" if value else "false"
+    if kind is SlotType.REAL:
+        return f"{value:g}"
+    return repr(value) if kind is SlotType.STRING else str(value)
 
 
 def _article(causality: str) -> str:

@@ -99,6 +99,17 @@ class IsolatedFmu:
         self._conn.close()
 
 
+def probe(interface: FmuInterface) -> str | None:
+    """Load the FMU's binary in a child process, instantiate and initialise it with its start
+    values, and free it: None if that works, else why not (check-fmu's "cannot load"). In a child,
+    so an FMU that crashes or hangs (START_TIMEOUT) is a finding, not the end of the checker."""
+    try:
+        IsolatedFmu(interface, "check-fmu", [], [], {}).close()
+    except SimulationError as exc:
+        return str(exc)
+    return None
+
+
 def _serve(conn, interface, instance, inputs, outputs, parameters, start_time, parent, folder) -> None:
     """The child: owns one FmuSlave and answers the parent's messages until told to close."""
     die_with_parent(parent)   # a hub killed with SIGKILL takes its FMU workers along
