@@ -185,7 +185,8 @@ def check_fmu(*args):
 def test_check_fmu_accepts_a_fitting_replacement(fmus):
     proc = check_fmu(fmus / "belt_drive-fmi3.fmu", "--like", fmus / "belt_drive-fmi2.fmu")
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert "  target slots  run (bool), speed_setpoint (real)\n" in proc.stdout
+    assert "  target slots  run (bool, start false), speed_setpoint (real, start 0)\n" in proc.stdout
+    assert "  settable      ramp (real, start 0, 0 … ∞)\n" in proc.stdout
     assert proc.stdout.endswith(f"  ✓ passes fmpy's validation; fits in place of {fmus / 'belt_drive-fmi2.fmu'}\n")
 
 
@@ -265,12 +266,15 @@ def test_a_pythonfmu_export_replaces_the_c_fmu_bit_for_bit(fmus, python_fmu, tmp
     assert len(speeds) > 20   # the logic really ran: the ramp passes many values
 
 
-def test_check_fmu_reports_what_fmpy_validation_finds_in_a_third_party_fmu(fmus, python_fmu):
+def test_check_fmu_warns_of_what_fmpy_validation_finds_in_a_third_party_fmu(fmus, python_fmu):
+    """PythonFMU leaves InitialUnknowns out of ModelStructure: a finding, and the hub runs the FMU
+    correctly (the test above), so a warning and exit 0, not a failure."""
     proc = check_fmu(python_fmu, "--like", fmus / "belt_drive-fmi2.fmu")
-    assert proc.returncode == 1
-    assert "  target slots  run (bool), speed_setpoint (real)\n" in proc.stdout
-    assert "  ✗ validation: ModelStructure/InitialUnknowns does not contain the expected set of variables." \
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "  target slots  run (bool, start false), speed_setpoint (real, start 0)\n" in proc.stdout
+    assert "  ! validation: ModelStructure/InitialUnknowns does not contain the expected set of variables." \
         in proc.stdout
+    assert proc.stdout.endswith(f"  ✓ usable, with 1 warning (above); fits in place of {fmus / 'belt_drive-fmi2.fmu'}\n")
 
 
 def test_an_isolated_fmu_gives_the_same_recording(fmus, tmp_path):

@@ -94,7 +94,7 @@ def test_every_fmi3_type_maps_to_a_slot(foreign, write_scenario, tmp_path):
     slots = {s.name: s.type.value for s in scenario.objects[0].module.slots(scenario.objects[0].params)["logic"]}
     assert slots == {"mode": "int", "x32": "real", "count16": "int", "big64": "int", "blob": "string",
                      "u_0": "real", "u_1": "real", "u_2": "real", "y32": "real", "big64_out": "int",
-                     "level8": "int", "blob_out": "string", "v_0": "real", "v_1": "real"}
+                     "level8": "int", "blob_out": "string", "v_0": "real", "v_1": "real", "twice64": "int"}
     run_scenario(path, tmp_path / "out")
     last = rows(tmp_path / "out" / "recording.csv")[-1]
     assert last["t.logic.y32"] == "1.5"                              # 0.5 * 3 in Float32
@@ -181,3 +181,14 @@ def test_an_enumeration_item_name_gets_a_did_you_mean(foreign, write_scenario):
         f"(slow=1, fast=2, stop=3) (did you mean 'fast'?)",
         f"{path}:4: objects.t.parameters.threshold: threshold is Integer: 101 is outside its range 0 … 100",
     ]
+
+
+def test_a_uint64_output_beyond_an_int_slot_is_named(foreign, write_scenario, tmp_path):
+    """twice64 = 2 · big64 in UInt64 arithmetic: big64 = -1 gives 2^64 − 2, more than an int slot's signed 64 bits."""
+    path = scene(write_scenario, foreign["typed3"], objects="big: {module: constant, type: int, value: -1}",
+                 flows="{from: big.value.out, to: t.logic.big64, when: target}", record="t.logic.twice64")
+    with pytest.raises(SimulationError) as info:
+        run_scenario(path, tmp_path / "out")
+    assert str(info.value) == ("FMU instance 't' (typed3.fmu) at t = 0.1 s: get outputs failed: output 'twice64' "
+                               "(UInt64) is 18446744073709551614, above 9223372036854775807, the largest value an "
+                               "int slot carries")

@@ -20,7 +20,7 @@ from fmpy.fmi3 import FMU3Slave
 
 from hub.core import scratch
 from hub.core.errors import PlanthubError, SimulationError
-from hub.core.slots import SlotType
+from hub.core.slots import INT_RANGE, SlotType
 from hub.logic.fmi_variables import FmuVariable, map_variables
 
 # Where each FMI version keeps this platform's binary.
@@ -322,16 +322,17 @@ class _Batches:
             prefix = "fmi2" if v2 else "fmi3"
             get, set_ = f"{prefix}Get{family}", f"{prefix}Set{family}"
             kind = variables[members[0]].type
-            checked = kind is SlotType.INT or fmi_type == "Binary"
+            check_writes = kind is SlotType.INT or fmi_type == "Binary"
             binary = (ctypes.c_size_t * start)() if fmi_type == "Binary" else None
-            self.groups.append((members, positions, kind, checked, binary, vrs, values, start,
+            check_reads = fmi_type == "UInt64"   # the one type that holds more than an int slot's 64 signed bits
+            self.groups.append((members, positions, kind, check_writes, check_reads, binary, vrs, values, start,
                                 get, _raw(fmu, get), set_, _raw(fmu, set_)))
         self._v2 = v2
 
     def set(self, values: list) -> None:
         component = self.fmu.component
-        for members, positions, kind, checked, binary, vrs, buf, n, _, _, name, setter in self.groups:
-            if checked:
+        for members, positions, kind, check_writes, _, binary, vrs, buf, n, _, _, name, setter in self.groups:
+            if check_writes:
                 for i in members:
                     try:
                         self.variables[i].check(values[i])
@@ -355,7 +356,7 @@ class _Batches:
     def get(self) -> list:
         out = [None] * self.count
         component = self.fmu.component
-        for members, positions, kind, _, binary, vrs, buf, n, name, getter, _, _ in self.groups:
+        for members, positions, kind, _, check_reads, binary, vrs, buf, n, name, getter, _, _ in self.groups:
             if binary is not None:
                 _check(name, getter(component, vrs, len(vrs), binary, buf, n))
                 for k, i in zip(positions, members):
@@ -367,6 +368,12 @@ class _Batches:
                 _check(name, getter(component, vrs, len(vrs), buf, n))
             for k, i in zip(positions, members):
                 out[i] = _from_c(kind, buf[k])
+            if check_reads:
+                for i in members:
+                    if out[i] > INT_RANGE[1]:
+                        v = self.variables[i]
+                        raise ValueError(f"{v.causality} {v.name!r} ({v.fmi_type}) is {out[i]}, above "
+                                         f"{INT_RANGE[1]}, the largest value an int slot carries")
         return out
 
 

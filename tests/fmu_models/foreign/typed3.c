@@ -25,6 +25,7 @@ typedef struct {
     fmi3Byte blob_out[BLOB_MAX];  /* 11 */
     size_t blob_out_size;
     double u[3], A[4], v[2];      /* 13, 14, 15 */
+    fmi3UInt64 twice64;           /* 16: 2 * big64 in unsigned 64-bit arithmetic: wraps for a negative big64 */
 } Model;
 
 static fmi3Status fail(Model *m, const char *format, ...)
@@ -101,6 +102,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
 
     m->y32 = m->gain32 * m->x32;
     m->big64_out = m->big64 + (fmi3Int64)m->count16 * m->mode;
+    m->twice64 = 2u * (fmi3UInt64)m->big64;
     for (i = 0; i < m->blob_size; i++) {
         m->blob_out[i] = m->blob[m->blob_size - 1 - i];
     }
@@ -259,10 +261,11 @@ fmi3Status fmi3GetUInt64(fmi3Instance instance, const fmi3ValueReference vr[], s
 
     for (i = 0; i < nvr; i++) {
         NEED(1)
-        if (vr[i] != 12) {
-            return fail(m, "%s: no UInt64 variable has value reference %u", __func__, vr[i]);
+        switch (vr[i]) {
+        case 12: values[k++] = 3; break;   /* n, the structural parameter: the size of u */
+        case 16: values[k++] = m->twice64; break;
+        default: return fail(m, "%s: no UInt64 variable has value reference %u", __func__, vr[i]);
         }
-        values[k++] = 3;   /* n, the structural parameter: the size of u */
     }
     return fmi3OK;
 }
