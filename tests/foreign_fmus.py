@@ -45,3 +45,12 @@ def build(name: str, version: int, out: Path) -> Path:
         archive.write(SOURCES / f"{name}.xml", "modelDescription.xml")
         archive.write(library, f"binaries/{_PLATFORM[version]}/{name}.so")
     return fmu
+
+
+if __name__ == "__main__":   # python -m tests.foreign_fmus OUT: the stand-in FMUs, for README's example
+    import sys
+
+    folder = Path(sys.argv[1] if len(sys.argv) > 1 else "build/foreign")
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, version in (("enum2", 2), ("typed3", 3)):
+        print(build(name, version, folder))

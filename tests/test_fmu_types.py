@@ -192,3 +192,20 @@ def test_a_uint64_output_beyond_an_int_slot_is_named(foreign, write_scenario, tm
     assert str(info.value) == ("FMU instance 't' (typed3.fmu) at t = 0.1 s: get outputs failed: output 'twice64' "
                                "(UInt64) is 18446744073709551614, above 9223372036854775807, the largest value an "
                                "int slot carries")
+
+
+def test_the_readme_example_runs_as_it_says(foreign, tmp_path):
+    """README's "Bringing your own FMU" example, run on the FMU the tests built."""
+    from .helpers import ROOT
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    block = readme[readme.index("<!-- example: bringing your own FMU -->"):]
+    block = block[block.index("```yaml\n") + 8:block.index("\n```", block.index("```yaml\n"))]
+    assert "file: ../build/foreign/typed3.fmu" in block
+    (tmp_path / "scenarios").mkdir()
+    path = tmp_path / "scenarios" / "byo.yaml"
+    path.write_text(block.replace("../build/foreign/typed3.fmu", str(foreign["typed3"])))
+    run_scenario(path, tmp_path / "out")
+    for row in rows(tmp_path / "out" / "recording.csv")[1:]:
+        assert (row["ctl.logic.y32"], row["ctl.logic.level8"], row["ctl.logic.blob_out"], row["ctl.logic.v_0"],
+                row["ctl.logic.v_1"]) == ("1.5", "-20", "0c0b0a", "5.0", "5.0")

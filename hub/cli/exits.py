@@ -16,7 +16,7 @@ exit codes:
   0    ok: the run ended (or an operator stopped it), every expectation held, the
        scenario or the FMU checks out
   1    failed: the run failed (a participant lost, an FMU's error), an expectation
-       failed, or check-fmu found a problem
+       failed, or check-fmu found a blocker (its warnings alone exit 0)
   2    usage: the command line is wrong (an unknown option or module, a bad --set or
        --realtime, a scenario without `expect:` given to `test`)
   3    bad scenario: the scenario, or a file it names, does not pass its checks (each
