@@ -43,7 +43,7 @@ from hub.logic.ports import fmu_ports
 from hub.core.logic_spec import own_step_problems
 from hub.core.module import Module
 from hub.core.registry import did_you_mean
-from hub.core.slots import Slot, SlotType
+from hub.core.slots import SlotType
 
 _SLOT_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 

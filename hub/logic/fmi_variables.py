@@ -35,7 +35,6 @@ _WIDTHS = {
 }
 _FLOAT32_MAX = 3.4028234663852886e38
 _HEX = re.compile(r"^(?:[0-9a-fA-F]{2})*$")
-_SLOT_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
 def slot_type(fmi_type: str) -> SlotType | None:
@@ -62,6 +61,7 @@ class FmuVariable:
     initial: str | None = None
     low: float | int | None = None    # the range a written value must be in: type width ∩ min/max
     high: float | int | None = None
+    narrowed: bool = False            # min/max narrow the type's own range
     items: tuple[tuple[str, int], ...] = ()   # an Enumeration's items (name, value)
     max_size: int | None = None       # a Binary's maxSize, in bytes
     element: int = 0                  # position within its array (0 for a scalar)
@@ -125,9 +125,7 @@ class FmuVariable:
             parts.append(f"start {_shown(self.type, self.start)}")
         if self.items:
             parts.append(f"items {self.item_list()}")
-        elif self.type in (SlotType.INT, SlotType.REAL) and (self.low, self.high) != _WIDTHS.get(self.fmi_type) \
-                and not (self.fmi_type == "Float32" and self.high == _FLOAT32_MAX) \
-                and (self.low is not None or self.high is not None):
+        elif self.narrowed:
             parts.append(self.range_text())
         return f"{self.name} ({', '.join(parts)})"
 
@@ -170,29 +168,32 @@ def map_variables(model_variables, attributes: dict[str, dict], fmi2: bool):
             continue
         xml = attributes.get(v.name, {})
         low, high = _range(v, xml, fmi2)
+        narrowed = (low, high) != _own_range(v.type, fmi2)
         items = tuple((i.name, int(i.value)) for i in v.declaredType.items) \
             if v.type == "Enumeration" and v.declaredType is not None else ()
         max_size = int(xml["maxSize"]) if "maxSize" in xml else None
         indices = [()] if not shape else list(itertools.product(*(range(n) for n in shape)))
-        for k, index in enumerate(indices):
-            name = v.name + "".join(f"_{i}" for i in index)
-            if name in variables:
-                unmapped.append((v.name, f"its element slot {name!r} has the name of another variable"))
-                break
+        names = [v.name + "".join(f"_{i}" for i in index) for index in indices]
+        taken = [name for name in names if name in variables]
+        if taken:   # an array is written whole, so it is mapped whole or not at all
+            unmapped.append((v.name, f"its slot {taken[0]!r} has the name of another variable's"))
+            continue
+        for k, name in enumerate(names):
             variables[name] = FmuVariable(name, kind, v.causality, v.valueReference, v.type, starts[k],
-                                          v.description or "", v.variability or "", v.initial, low, high, items,
-                                          max_size, k, count, v.name if shape else "")
+                                          v.description or "", v.variability or "", v.initial, low, high,
+                                          narrowed, items, max_size, k, count, v.name if shape else "")
     return variables, unmapped
 
 
 def _starts(v, kind: SlotType, count: int) -> list:
     if v.start is None:
         return [None] * count
-    if v.type == "Binary":
-        words = [v.start] if count == 1 else v.start.split()
-        return [w.lower() for w in words] if all(_HEX.match(w) for w in words) else _bad(v.start)
     if kind is SlotType.STRING:
-        return [v.start] * count
+        if count > 1:   # an FMI 3 String or Binary array has one <Start> per element; fmpy keeps the first
+            raise ValueError(f"a {v.type} array's start values are not all read")
+        if v.type == "Binary" and not _HEX.match(v.start):
+            raise ValueError(f"{v.start!r} is not hex")
+        return [v.start.lower() if v.type == "Binary" else v.start]
     words = v.start.split()
     if len(words) != count:
         raise ValueError(f"{len(words)} values for {count} elements")
@@ -201,10 +202,6 @@ def _starts(v, kind: SlotType, count: int) -> list:
     if kind is SlotType.INT:
         return [int(w) for w in words]
     return [float(w) for w in words]
-
-
-def _bad(text):
-    raise ValueError(f"{text!r} is not hex")
 
 
 def _number(text, kind):
@@ -218,19 +215,21 @@ def _number(text, kind):
         return int(float(text))
 
 
+def _own_range(fmi_type: str, fmi2: bool):
+    """The values a type holds at all (None: unbounded)."""
+    if fmi_type == "Float32":
+        return -_FLOAT32_MAX, _FLOAT32_MAX
+    if fmi_type == "Enumeration":   # written with fmi2SetInteger, or fmi3SetInt64
+        return _WIDTHS["Integer" if fmi2 else "Int64"]
+    return _WIDTHS.get(fmi_type, (None, None))
+
+
 def _range(v, xml: dict, fmi2: bool):
-    """The range a written value must be in: the type's own width, narrowed by min/max."""
-    if v.type in _REAL:
-        low, high = (-_FLOAT32_MAX, _FLOAT32_MAX) if v.type == "Float32" else (None, None)
-        kind = "real"
-    elif v.type == "Enumeration":   # written with fmi2SetInteger, or fmi3SetInt64
-        low, high = _WIDTHS["Integer" if fmi2 else "Int64"]
-        kind = "int"
-    elif v.type in _WIDTHS:
-        low, high = _WIDTHS[v.type]
-        kind = "int"
-    else:
+    """The range a written value must be in: the type's own, narrowed by min/max."""
+    if v.type not in _REAL and v.type not in _WIDTHS and v.type != "Enumeration":
         return None, None
+    kind = "real" if v.type in _REAL else "int"
+    low, high = _own_range(v.type, fmi2)
     declared = v.declaredType
     for source in (declared, v):
         if source is None:
@@ -312,7 +311,3 @@ def parameter_problems(path_name: str, variables: dict[str, FmuVariable], unmapp
         except ValueError as exc:
             problems.append((name, f"{name} is {variable.fmi_type}: {exc}"))
     return problems
-
-
-def slot_name_ok(name: str) -> bool:
-    return bool(_SLOT_NAME.match(name))
