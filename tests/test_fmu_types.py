@@ -209,3 +209,26 @@ def test_the_readme_example_runs_as_it_says(foreign, tmp_path):
     for row in rows(tmp_path / "out" / "recording.csv")[1:]:
         assert (row["ctl.logic.y32"], row["ctl.logic.level8"], row["ctl.logic.blob_out"], row["ctl.logic.v_0"],
                 row["ctl.logic.v_1"]) == ("1.5", "-20", "0c0b0a", "5.0", "5.0")
+
+
+def test_a_real_beyond_float32_is_named_when_written(foreign, write_scenario, tmp_path):
+    """a.v_0 = 9e15 · 9e15 feeds b.u_0, so b.v_0 = 9e15 · 8.1e31 ≈ 7.3e47 reaches c.x32, a Float32 (at most
+    3.4e38): the write is refused naming the variable, rather than an inf reaching the FMU."""
+    big = ", parameters: {A: [[9.0e15, 0], [0, 1]], u_0: 9.0e15}"
+    path = write_scenario(f"""
+        planthub: 1
+        run: {{duration: 0.5, physics_rate: 100, communication_step: 0.1}}
+        objects:
+          a: {{module: fmu, file: {foreign['typed3']}{big}}}
+          b: {{module: fmu, file: {foreign['typed3']}, parameters: {{A: [[9.0e15, 0], [0, 1]]}}}}
+          c: {{module: fmu, file: {foreign['typed3']}}}
+        flows:
+          - {{from: a.logic.v_0, to: b.logic.u_0}}
+          - {{from: b.logic.v_0, to: c.logic.x32}}
+        record: [c.logic.y32]
+        """)
+    with pytest.raises(SimulationError) as info:
+        run_scenario(path, tmp_path / "out")
+    message = str(info.value)
+    assert message.startswith("FMU instance 'c' (typed3.fmu) at t = 0.2 s: set inputs failed: input 'x32' (Float32): ")
+    assert message.endswith(" is outside its range -3.40282e+38 … 3.40282e+38")

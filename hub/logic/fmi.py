@@ -298,8 +298,8 @@ class _Batches:
     """Variables grouped by FMI type, each group with ready value-reference and value arrays.
 
     An FMI 3 array is one value reference with many values: its elements sit side by side in
-    the group's value array, in FMI's row-major order. Integers are checked against their
-    range before they are written (a C integer would wrap silently); a Binary travels as hex.
+    the group's value array, in FMI's row-major order. Integers and Float32s are checked against
+    their range before they are written; a Binary travels as hex.
     """
 
     def __init__(self, fmu, v2: bool, variables: list[FmuVariable]):
@@ -322,7 +322,8 @@ class _Batches:
             prefix = "fmi2" if v2 else "fmi3"
             get, set_ = f"{prefix}Get{family}", f"{prefix}Set{family}"
             kind = variables[members[0]].type
-            check_writes = kind is SlotType.INT or fmi_type == "Binary"
+            # A C integer or float would wrap or overflow to inf silently; a Binary is decoded from hex.
+            check_writes = kind is SlotType.INT or fmi_type in ("Binary", "Float32")
             binary = (ctypes.c_size_t * start)() if fmi_type == "Binary" else None
             check_reads = fmi_type == "UInt64"   # the one type that holds more than an int slot's 64 signed bits
             self.groups.append((members, positions, kind, check_writes, check_reads, binary, vrs, values, start,
