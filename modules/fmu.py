@@ -2,8 +2,7 @@
 
 | slot           | type        | dir    | meaning                                                  |
 |----------------|-------------|--------|----------------------------------------------------------|
-| logic.<input>  | the input's | target | each FMU input variable; it holds the FMU's start value  |
-|                |             |        | until a flow writes it                                   |
+| logic.<input>  | the input's | target | each FMU input variable; the FMU's start value until fed |
 | logic.<output> | the output's| source | each FMU output variable, active every step              |
 
 Slot types by FMI type: Real, Float32/64 → real; Integer, Int8…64, UInt8…64, Enumeration → int
