@@ -4,14 +4,13 @@ server (up to --limit s), sets plc_ready, then answers every scan until the serv
 prints how many scans and decisions it made."""
 from __future__ import annotations
 
-import argparse
 import asyncio
 import sys
 import time
 
 from asyncua import Client, ua
 
-from tests.plc.routing import Routing, read_tags
+from tests.plc.routing import Routing, arguments, read_tags
 
 
 async def main(args) -> int:
@@ -65,9 +64,4 @@ async def main(args) -> int:
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("tags")
-    parser.add_argument("endpoint")
-    parser.add_argument("--lanes", required=True)
-    parser.add_argument("--limit", type=float, default=300.0)
-    raise SystemExit(asyncio.run(main(parser.parse_args())))
+    raise SystemExit(asyncio.run(main(arguments(__doc__))))

@@ -4,6 +4,7 @@ switch's command into its lane (or back to base) for one scan; then write the sc
 The same decisions as modules/plant_control.py, on tags instead of slots."""
 from __future__ import annotations
 
+import argparse
 import csv
 
 
@@ -29,3 +30,13 @@ class Routing:
             bits[f"sw{i}_base"] = moved and not ours
             self.decisions += moved
         return bits
+
+
+def arguments(doc: str) -> argparse.Namespace:
+    """A test PLC's command line: TAGS.csv ENDPOINT --lanes A,B,… [--limit S]."""
+    parser = argparse.ArgumentParser(description=doc.splitlines()[0])
+    parser.add_argument("tags")
+    parser.add_argument("endpoint")
+    parser.add_argument("--lanes", required=True)
+    parser.add_argument("--limit", type=float, default=300.0)
+    return parser.parse_args()
