@@ -1,4 +1,4 @@
-"""FMU: logic in an FMI 2.0 or 3.0 co-simulation FMU, stepped at every communication point.
+"""FMU: logic or a plant-side model in an FMI 2.0 or 3.0 FMU, stepped at every communication point.
 
 | slot           | type        | dir    | meaning                                                  |
 |----------------|-------------|--------|----------------------------------------------------------|
@@ -26,6 +26,13 @@ over the Zenoh bus in lockstep; with `participant: join` it waits (`join_timeout
 started elsewhere, e.g. on another machine: `planthub serve-fmu FILE --run RUN --name OBJECT
 --connect tcp/HUB:PORT`. Same results as in-process, bit for bit. On a bus with TLS the launched
 process presents `tls: {certificate, key}`, or else the hub's own certificate, with a warning.
+
+A co-simulation FMU steps itself; an FMI 3 one with event mode has its events handled as they come
+(event mode, and a step it returns early from continued to the point). A model-exchange FMU (the
+only interface it offers, or `interface: model-exchange`) is integrated by the hub from point to
+point with its inputs held: `solver: cvode` (SUNDIALS CVODE from fmpy, variable step, state events
+located; `tolerance`, `max_step`) or `euler` (fixed steps of `max_step`); a changed input is an
+input event, and time, state and step events are handled in event mode as FMI prescribes.
 """
 from __future__ import annotations
 
@@ -36,7 +43,8 @@ from hub.bus.lockstep import RemoteSpec
 from hub.bus.tls import LAUNCHED_SCHEMA, launched_problems
 from hub.logic.component import LogicComponent
 from hub.logic.factory import SlavePlan, make_slave
-from hub.logic.fmi import FmuError, inspect_fmu
+from hub.logic.fmi import CO_SIMULATION, MODEL_EXCHANGE, FmuError, inspect_fmu
+from hub.logic.fmi_me import SOLVERS, Integration
 from hub.logic.fmi_variables import parameter_problems, parameter_values
 from hub.logic.ports import fmu_ports
 from hub.core.logic_spec import own_step_problems
@@ -77,6 +85,14 @@ class Fmu(Module):
                              "description": "a non-finite real from the logic: stop the run, or hold the last good value (logged)"},
             "join_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
                              "description": "s to wait for the participant to join (and to rejoin in a paused run)"},
+            "interface": {"enum": [CO_SIMULATION, MODEL_EXCHANGE],
+                          "description": "the FMU's interface to run (default: co-simulation where it offers it)"},
+            "solver": {"enum": list(SOLVERS),
+                       "description": "model exchange: cvode (variable step, default) or euler (fixed steps of max_step)"},
+            "max_step": {"type": "number", "exclusiveMinimum": 0,
+                         "description": "model exchange: the solver's longest internal step, s (cvode: unlimited)"},
+            "tolerance": {"type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 1,
+                          "description": "model exchange, cvode: the relative tolerance (default 1e-6)"},
             "tls": {**LAUNCHED_SCHEMA, "description": "with participant: launch, the certificate `planthub "
                                                       "serve-fmu` presents on the bus (without: the hub's own, "
                                                       "with a warning)"},
@@ -99,6 +115,16 @@ class Fmu(Module):
         if "tls" in params and params.get("participant") != "launch":
             problems.append((("tls",), "a certificate goes with participant: launch, a process the hub starts on "
                                        "the bus; one that joins presents its own (serve-fmu --tls-cert, --tls-key)"))
+        kind = params.get("interface", fmu.kind)
+        if kind not in fmu.interfaces:
+            problems.append((("interface",), f"{fmu.path.name} offers no {kind} interface with a binary for this "
+                                             f"platform (it offers: {', '.join(fmu.interfaces)})"))
+        elif kind == CO_SIMULATION:
+            problems += [((key,), f"{key} is for a model-exchange FMU, which the hub integrates; {fmu.path.name} "
+                                  f"runs as co-simulation and steps itself")
+                         for key in ("solver", "max_step", "tolerance") if key in params]
+        elif params.get("solver") == "euler" and "max_step" not in params:
+            problems.append((("solver",), "euler takes fixed steps: give their length as max_step"))
         variables = fmu.variables
         ports = {v.name for v in fmu.of("input") + fmu.of("output")}
         problems += [(("parameters", name), message) for name, message in
@@ -131,7 +157,8 @@ class Fmu(Module):
     @classmethod
     def check_run(cls, params, run):
         fmu = inspect_fmu(params["file"])
-        if run.event_driven and not fmu.variable_steps and "step" not in params:
+        if (run.event_driven and params.get("interface", fmu.kind) == CO_SIMULATION and not fmu.variable_steps
+                and "step" not in params):
             return [(("file",), f"{fmu.path.name} cannot handle variable communication steps, "
                                 "which run.event_driven needs (canHandleVariableCommunicationStepSize); "
                                 "or give it its own fixed `step`")]
@@ -155,7 +182,19 @@ class Fmu(Module):
             command += ["--event", name]
         for variable, slot in params.get("map", {}).items():
             command += ["--map", f"{variable}={slot}"]
+        integration = cls.integration(params)
+        if integration.interface == MODEL_EXCHANGE:
+            command += ["--interface", MODEL_EXCHANGE, "--solver", integration.solver,
+                        "--tolerance", repr(integration.tolerance)]
+            if integration.max_step is not None:
+                command += ["--max-step", repr(integration.max_step)]
         return command
+
+    @classmethod
+    def integration(cls, params) -> Integration:
+        """The interface the object runs and, for model exchange, its solver."""
+        return Integration(params.get("interface", inspect_fmu(params["file"]).kind), params.get("solver", "cvode"),
+                           params.get("max_step"), params.get("tolerance", 1e-6))
 
     @classmethod
     def build(cls, name, params, world):
@@ -176,7 +215,8 @@ class Fmu(Module):
         transport = "bus" if "participant" in params else "child" if params["isolate"] else "hub"
         slave = make_slave(SlavePlan(transport, spec, fmu=fmu, variables=(tuple(v for _, v in inputs),
                                                                            tuple(v for _, v in outputs)),
-                                     step_timeout=float(params["step_timeout"])), world.rate)
+                                     step_timeout=float(params["step_timeout"]), integration=cls.integration(params)),
+                           world.rate)
         as_pairs = lambda pairs: [(s.name, s.type is SlotType.VOID) for s, _ in pairs]
         every = round(params["step"] * world.rate) if "step" in params else None
         return {"logic": LogicComponent(name, "logic", tuple(s for s, _ in ports), slave,

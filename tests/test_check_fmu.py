@@ -1,6 +1,6 @@
 """`planthub check-fmu`'s verdicts: blockers exit 1, findings the hub can live with are warnings (exit 0).
 
-    cannot load · no co-simulation interface (model exchange only, scheduled execution) · no binary → ✗, exit 1
+    cannot load · neither co-simulation nor model exchange (scheduled execution only) · no binary → ✗, exit 1
     variables without a slot · fmpy validation notes                                        → !, exit 0
 """
 import subprocess
@@ -68,8 +68,8 @@ def test_a_scheduled_execution_fmu_gets_the_exact_verdict(typed3, tmp_path, writ
         COSIM, '<ScheduledExecution modelIdentifier="typed3"/>').replace("</ModelVariables>", CLOCK))
     proc = planthub("check-fmu", fmu)
     assert proc.returncode == 1
-    verdict = (f"{fmu}: scheduled execution: not supported (the FMU offers no co-simulation interface; "
-               f"planthub needs a co-simulation FMU)")
+    verdict = (f"{fmu}: scheduled execution: not supported (the FMU offers neither co-simulation nor model "
+               f"exchange, only scheduled execution; planthub runs those two)")
     assert proc.stderr == f"planthub: {verdict}\n"
     path = write_scenario(f"planthub: 1\nobjects:\n  t: {{module: fmu, file: {fmu}}}\n")
     proc = planthub("validate", path)
@@ -77,11 +77,24 @@ def test_a_scheduled_execution_fmu_gets_the_exact_verdict(typed3, tmp_path, writ
     assert f"{path}:3: objects.t.file: {verdict}" in proc.stderr
 
 
-def test_a_model_exchange_fmu_keeps_its_verdict(typed3, tmp_path):
+@pytest.mark.parametrize("name, version", [("ball2", 2), ("tank3", 3)])
+def test_a_model_exchange_fmu_is_usable(tmp_path, name, version):
+    """Model exchange only: the hub integrates it (tests/test_model_exchange.py), and says so."""
+    fmu = build(name, version, tmp_path)
+    proc = planthub("check-fmu", fmu)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert proc.stdout.startswith(f"{fmu}: FMI {version}.0 model exchange (integrated by planthub: `solver:` cvode "
+                                  f"or euler), model '{name}'\n")
+    assert proc.stdout.endswith("  ✓ passes fmpy's validation\n")
+
+
+def test_a_model_exchange_binary_that_does_not_instantiate_is_a_blocker(typed3, tmp_path):
+    """typed3's binary has no model-exchange functions of its own (generated stubs fail): probed, not believed."""
     fmu = rewrite(typed3, tmp_path / "me.fmu", lambda x: x.replace(COSIM, '<ModelExchange modelIdentifier="typed3"/>'))
     proc = planthub("check-fmu", fmu)
     assert proc.returncode == 1
-    assert proc.stderr == f"planthub: {fmu}: model exchange only; planthub needs a co-simulation FMU\n"
+    assert proc.stdout.startswith(f"{fmu}: FMI 3.0 model exchange")
+    assert "  ✗ cannot load: FMU instance 'check-fmu' (me.fmu) at t = 0 s: instantiate failed" in proc.stdout
 
 
 def test_an_fmu_without_a_binary_for_this_platform_is_a_blocker(typed3, tmp_path):
@@ -116,5 +129,5 @@ def test_validate_names_what_is_not_mapped(typed3, write_scenario):
 def test_describe_says_an_input_keeps_its_start_value():
     proc = planthub("describe", "fmu")
     assert proc.returncode == 0
-    assert "each FMU input variable; it holds the FMU's start value" in proc.stdout
+    assert "each FMU input variable; the FMU's start value until fed" in proc.stdout
     assert "Binary → string of hex" in proc.stdout

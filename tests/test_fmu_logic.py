@@ -101,21 +101,17 @@ def rewrite(source, target, edit_xml=None, drop=None):
             dst.writestr(item, data)
 
 
-def test_fmi1_model_exchange_only_and_missing_binary(fmus, write_scenario, tmp_path):
+def test_fmi1_and_missing_binary(fmus, write_scenario, tmp_path):
     fmi2 = fmus / "belt_drive-fmi2.fmu"
-    rewrite(fmi2, tmp_path / "me.fmu", edit_xml=lambda x: re.sub(
-        r"<CoSimulation[^>]*?(/?)>", r'<ModelExchange modelIdentifier="belt_drive"\1>', x)
-        .replace("</CoSimulation>", "</ModelExchange>"))
     rewrite(fmi2, tmp_path / "nobin.fmu", drop=lambda name: name.startswith("binaries/"))
     rewrite(fmi2, tmp_path / "v1.fmu", edit_xml=lambda x: x.replace('fmiVersion="2.0"', 'fmiVersion="1.0"'))
     found = {}
-    for name in ("me.fmu", "nobin.fmu", "v1.fmu"):
+    for name in ("nobin.fmu", "v1.fmu"):
         found[name] = problems(scene(write_scenario, f"file: {name}", ""))[0].split(": objects.drive.file: ")[1]
-    assert found["me.fmu"] == f"{tmp_path / 'me.fmu'}: model exchange only; planthub needs a co-simulation FMU"
     assert found["nobin.fmu"] == (f"{tmp_path / 'nobin.fmu'}: no binary for this platform "
                                   f"(binaries/linux64/belt_drive.so); the FMU has: none")
     assert found["v1.fmu"] == (f"{tmp_path / 'v1.fmu'}: FMI 1.0 is not supported "
-                               f"(planthub loads FMI 2.0 and 3.0 co-simulation FMUs)")
+                               f"(planthub loads FMI 2.0 and 3.0 FMUs, co-simulation or model exchange)")
 
 
 def test_unknown_parameter_event_and_type_mismatch(fmus, write_scenario):

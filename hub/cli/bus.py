@@ -24,11 +24,17 @@ def add_commands(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str 
                     "with `participant: join` (or one the hub launches).",
         epilog="example:\n  planthub serve-fmu build/fmus/belt_drive-fmi2.fmu --run belt_ramp_fmu --name drive "
                "\\\n      --connect tcp/192.168.1.5:7447 --event run --map speed=belt_speed\n\n" + epilog)
-    serve.add_argument("fmu", type=Path, help="the FMU file (FMI 2.0 or 3.0, co-simulation)")
+    serve.add_argument("fmu", type=Path, help="the FMU file (FMI 2.0 or 3.0, co-simulation or model exchange)")
     serve.add_argument("--event", action="append", default=[], metavar="VARIABLE",
                        help="a Boolean variable that is a void slot (the object's `events`)")
     serve.add_argument("--map", action="append", default=[], metavar="VARIABLE=SLOT",
                        help="a variable's slot name (the object's `map`)")
+    serve.add_argument("--interface", choices=["co-simulation", "model-exchange"],
+                       help="the interface to run (the object's `interface`; default: co-simulation where offered)")
+    serve.add_argument("--solver", choices=["cvode", "euler"], default="cvode",
+                       help="model exchange: the solver (the object's `solver`)")
+    serve.add_argument("--max-step", type=float, metavar="S", help="model exchange: the solver's longest step, s")
+    serve.add_argument("--tolerance", type=float, default=1e-6, help="model exchange: cvode's relative tolerance")
     add_options(serve)
     serve.set_defaults(command_parser=serve)
 
@@ -72,6 +78,7 @@ def bus_settings(args, scenario: Scenario) -> BusSettings | None:
 
 
 def _serve_fmu(parser, args) -> int:
+    from hub.logic.fmi_me import Integration
     from hub.logic.served import FmuParticipant
     from hub.bus.participant import check_options, serve
 
@@ -82,7 +89,11 @@ def _serve_fmu(parser, args) -> int:
         if not sep:
             parser.error(f"--map expects VARIABLE=SLOT, got {item!r}")
         rename[variable] = slot
-    logic = FmuParticipant(str(args.fmu), args.event, rename, instance=args.name)   # an FmuError: exit 1
+    if args.solver == "euler" and args.max_step is None:
+        parser.error("--solver euler needs --max-step")
+    integration = Integration(args.interface, args.solver, args.max_step, args.tolerance)
+    logic = FmuParticipant(str(args.fmu), args.event, rename, instance=args.name,
+                           integration=integration)   # an FmuError: exit 1
     return serve(logic, args=args)
 
 

@@ -184,8 +184,17 @@ def _report(args) -> int:
     return OK
 
 
+def _interfaces(fmu) -> str:
+    """How the hub runs each interface the FMU offers, the one it runs unless told first."""
+    said = {"co-simulation": "co-simulation" + (" with event mode (its events handled as they come)"
+                                                if fmu.event_mode else ""),
+            "model-exchange": "model exchange (integrated by planthub: `solver:` cvode or euler)"}
+    first, *others = fmu.interfaces
+    return said[first] + "".join(f"; also {said[k]} (`interface: {k}`)" for k in others)
+
+
 def _check_fmu(args) -> int:
-    """Blockers (it cannot load, has no co-simulation interface, no binary for this platform, or
+    """Blockers (it cannot load, has neither co-simulation nor model exchange, no binary for this platform, or
     cannot replace --like's FMU) → ✗ and exit 1; findings the hub can live with (fmpy's
     validation notes, variables without a slot) → ! warnings, exit 0."""
     from hub.logic.fmi import compare, inspect_fmu, validate
@@ -193,7 +202,7 @@ def _check_fmu(args) -> int:
 
     fmu = inspect_fmu(args.fmu)   # an FmuError (no such file, no FMU, no interface, no binary): exit 1
     reference = inspect_fmu(args.like) if args.like else None
-    print(f"{args.fmu}: FMI {fmu.fmi_version} co-simulation, model {fmu.model_name!r}")
+    print(f"{args.fmu}: FMI {fmu.fmi_version} {_interfaces(fmu)}, model {fmu.model_name!r}")
     settable = [v for v in fmu.variables.values() if v.causality != "input" and v.settable() is None]
     for label, variables in (("target slots", fmu.of("input")), ("source slots", fmu.of("output")),
                              ("settable", settable)):

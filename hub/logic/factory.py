@@ -9,7 +9,8 @@ from pathlib import Path
 from hub.bus.lockstep import RemoteSpec
 from hub.core.errors import SimulationError
 from hub.core.slave import LogicSlave
-from hub.logic.fmi import FmuInterface, FmuSlave
+from hub.logic.fmi import FmuInterface
+from hub.logic.fmi_me import Integration, open_fmu
 from hub.logic.inprocess import InProcessSlave, make_logic
 from hub.logic.isolated import IsolatedFmu
 from hub.logic.remote import RemoteSlave
@@ -33,6 +34,7 @@ class SlavePlan:
     variables: tuple[tuple[str, ...], tuple[str, ...]] = ((), ())
     python: tuple[str, ...] | None = None
     step_timeout: float = 10.0   # s one step may take (a child is killed; the hub's own process is ended)
+    integration: Integration | None = None   # an FMU's interface and, for model exchange, its solver
 
 
 def make_slave(plan: SlavePlan, rate: int) -> LogicSlave:
@@ -46,9 +48,9 @@ def make_slave(plan: SlavePlan, rate: int) -> LogicSlave:
         inputs, outputs = plan.variables
         if plan.transport == "child":
             return IsolatedFmu(plan.fmu, spec.name, list(inputs), list(outputs), dict(spec.parameters),
-                               step_timeout=plan.step_timeout)
-        slave = FmuSlave(plan.fmu, spec.name, list(inputs), list(outputs), dict(spec.parameters),
-                         step_timeout=plan.step_timeout)
+                               step_timeout=plan.step_timeout, integration=plan.integration)
+        slave = open_fmu(plan.fmu, spec.name, list(inputs), list(outputs), dict(spec.parameters),
+                         step_timeout=plan.step_timeout, integration=plan.integration)
         WATCHDOG.watch(slave)   # in the hub's own process: a hang past step_timeout ends the process
         return slave
     if plan.python is not None and plan.transport == "hub":

@@ -1,4 +1,4 @@
-"""The FMU adapter: every FMI call planthub makes goes through this file (FMUs loaded with fmpy)."""
+"""The FMU adapter: every FMI call planthub makes goes through this file and, for model exchange, fmi_me.py (FMUs loaded with fmpy)."""
 from __future__ import annotations
 
 import ctypes
@@ -33,22 +33,44 @@ class FmuError(PlanthubError):
     """An FMU file cannot be used: the message names the file and the cause."""
 
 
+#: The interfaces planthub runs, in the order it prefers them when an FMU offers both.
+CO_SIMULATION, MODEL_EXCHANGE = "co-simulation", "model-exchange"
+
+
 @dataclass(frozen=True)
 class FmuInterface:
     """What a scenario check needs of an FMU: its version, identity, its variables as slots
-    (hub/logic/fmi_variables.py: array elements one each) and what is not mapped, with the reason."""
+    (hub/logic/fmi_variables.py: array elements one each), what is not mapped, with the reason,
+    and the interfaces it offers with a binary for this platform (co-simulation first)."""
 
     path: Path
     fmi_version: str
     model_name: str
-    identifier: str
+    identifier: str            # the preferred interface's modelIdentifier
     guid: str
     variables: dict[str, FmuVariable]
-    variable_steps: bool       # canHandleVariableCommunicationStepSize
+    variable_steps: bool       # canHandleVariableCommunicationStepSize (co-simulation)
     unmapped: tuple[tuple[str, str], ...] = ()   # (variable, why it has no slot)
+    identifiers: tuple[tuple[str, str], ...] = ()   # (interface, modelIdentifier), preferred first
+    states: int = 0            # continuous states (model exchange)
+    event_indicators: int = 0  # model exchange
+    completed_step: bool = False   # model exchange: needsCompletedIntegratorStep
+    event_mode: bool = False   # FMI 3 co-simulation: hasEventMode (events handled by the importer)
 
     def of(self, causality: str) -> list[FmuVariable]:
         return [v for v in self.variables.values() if v.causality == causality]
+
+    @property
+    def interfaces(self) -> tuple[str, ...]:
+        return tuple(kind for kind, _ in self.identifiers)
+
+    @property
+    def kind(self) -> str:
+        """The interface planthub uses unless a scenario picks another: co-simulation where offered."""
+        return self.identifiers[0][0]
+
+    def identifier_of(self, kind: str) -> str:
+        return dict(self.identifiers)[kind]
 
 
 def inspect_fmu(path: Path) -> FmuInterface:
@@ -86,22 +108,24 @@ def _read_interface(path: Path) -> FmuInterface:
     version = root.get("fmiVersion", "")
     if version not in _PLATFORM:
         raise FmuError(f"{path}: FMI {version or '(no fmiVersion)'} is not supported "
-                       f"(planthub loads FMI 2.0 and 3.0 co-simulation FMUs)")
+                       f"(planthub loads FMI 2.0 and 3.0 FMUs, co-simulation or model exchange)")
     try:
         md = read_model_description(str(path))
     except Exception as exc:  # fmpy reports schema and XML problems with several exception types
         raise FmuError(f"{path}: modelDescription.xml is not valid: {exc}") from None
-    if md.coSimulation is None:
+    offered = [(kind, part) for kind, part in ((CO_SIMULATION, md.coSimulation), (MODEL_EXCHANGE, md.modelExchange))
+               if part is not None]
+    if not offered:
         if getattr(md, "scheduledExecution", None) is not None:
-            raise FmuError(f"{path}: scheduled execution: not supported (the FMU offers no co-simulation "
-                           f"interface{', only scheduled execution and model exchange' if md.modelExchange else ''}; "
-                           f"planthub needs a co-simulation FMU)")
-        raise FmuError(f"{path}: model exchange only; planthub needs a co-simulation FMU")
-    identifier = md.coSimulation.modelIdentifier
-    binary = f"binaries/{_PLATFORM[version]}/{identifier}.so"
-    if binary not in names:
+            raise FmuError(f"{path}: scheduled execution: not supported (the FMU offers neither co-simulation "
+                           f"nor model exchange, only scheduled execution; planthub runs those two)")
+        raise FmuError(f"{path}: the FMU offers no interface planthub runs (co-simulation or model exchange)")
+    binaries = {kind: f"binaries/{_PLATFORM[version]}/{part.modelIdentifier}.so" for kind, part in offered}
+    identifiers = tuple((kind, part.modelIdentifier) for kind, part in offered if binaries[kind] in names)
+    if not identifiers:
         found = sorted({n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") >= 2})
-        raise FmuError(f"{path}: no binary for this platform ({binary}); the FMU has: {', '.join(found) or 'none'}")
+        raise FmuError(f"{path}: no binary for this platform ({binaries[offered[0][0]]}); the FMU has: "
+                       f"{', '.join(found) or 'none'}")
     # fmpy keeps no min/max of UInt types nor a Binary's maxSize: the XML's own attributes fill in.
     listed = root.find("ModelVariables")
     attributes = {}
@@ -110,9 +134,13 @@ def _read_interface(path: Path) -> FmuInterface:
         if element.get("name") is not None and typed is not None:
             attributes[element.get("name")] = dict(typed.attrib)
     variables, unmapped = map_variables(md.modelVariables, attributes, version == "2.0")
-    variable_steps = bool(md.coSimulation.canHandleVariableCommunicationStepSize)
-    return FmuInterface(path, version, md.modelName, identifier, md.guid, variables, variable_steps,
-                        tuple(unmapped))
+    cs, me = md.coSimulation, md.modelExchange
+    return FmuInterface(path, version, md.modelName, identifiers[0][1], md.guid, variables,
+                        bool(cs and cs.canHandleVariableCommunicationStepSize), tuple(unmapped), identifiers,
+                        states=md.numberOfContinuousStates if me else 0,
+                        event_indicators=md.numberOfEventIndicators if me else 0,
+                        completed_step=bool(me and me.needsCompletedIntegratorStep),
+                        event_mode=bool(cs and version == "3.0" and getattr(cs, "hasEventMode", False)))
 
 
 def validate(path: Path) -> list[str]:
@@ -145,10 +173,16 @@ class FmuSlave:
     Inputs and outputs are set and read through pre-allocated ctypes arrays grouped by type,
     one FMI call per type and direction per step. Every call goes through `_call`, which turns
     a failing status into a SimulationError naming the instance, the function, the time and
-    the FMU's own last log lines.
+    the FMU's own last log lines. An FMI 3 FMU with event mode (hasEventMode) is instantiated
+    with it and with early return allowed: its events are handled in event mode as they come,
+    and a step it returned early from is continued to the communication point.
     """
 
     on_bus = False
+    KIND = CO_SIMULATION
+    _CLASSES = {"2.0": FMU2Slave, "3.0": FMU3Slave}
+    #: early returns one communication step may take: past it the FMU is taken to be stuck at an event
+    MAX_EVENTS = 10_000
 
     def __init__(self, interface: FmuInterface, instance: str, inputs: list[str], outputs: list[str],
                  parameters: dict, start_time: float = 0.0, step_timeout: float = 10.0):
@@ -161,11 +195,14 @@ class FmuSlave:
         self._dir = Path(tempfile.mkdtemp(prefix=f"fmu-{instance}-", dir=scratch.folder()))
         self._fmu = None
         try:
+            if self.KIND not in interface.interfaces:
+                raise SimulationError(self._failure(f"the FMU offers no {self.KIND} interface with a binary "
+                                                    f"for this platform"))
             extract(str(interface.path), str(self._dir))
-            cls = FMU2Slave if interface.fmi_version == "2.0" else FMU3Slave
             # A binary that does not load (a missing symbol, another platform) is named like a failing call.
-            self._fmu = self._call("load the binary", cls, guid=interface.guid, unzipDirectory=str(self._dir),
-                                   modelIdentifier=interface.identifier, instanceName=instance)
+            self._fmu = self._call("load the binary", self._CLASSES[interface.fmi_version], guid=interface.guid,
+                                   unzipDirectory=str(self._dir), modelIdentifier=interface.identifier_of(self.KIND),
+                                   instanceName=instance)
             self._v2 = interface.fmi_version == "2.0"
             self._instantiate()
             self._in = _Batches(self._fmu, self._v2, [interface.variables[n] for n in inputs])
@@ -182,16 +219,23 @@ class FmuSlave:
             else:
                 self._call("enterInitializationMode", self._fmu.enterInitializationMode, startTime=start_time)
             self._call("exitInitializationMode", self._fmu.exitInitializationMode)
-            if self._v2:
-                self._raw_do_step, self._do_step = _raw(self._fmu, "fmi2DoStep"), self._do_step_2
-            else:
-                self._raw_do_step, self._do_step = _raw(self._fmu, "fmi3DoStep"), self._do_step_3
-                # eventHandlingNeeded, terminateSimulation, earlyReturn, lastSuccessfulTime
-                self._step_results = tuple(ctypes.byref(c()) for c in
-                                           (ctypes.c_bool, ctypes.c_bool, ctypes.c_bool, ctypes.c_double))
+            self._begin()
         except BaseException:
             self.close()
             raise
+
+    def _begin(self) -> None:
+        """After initialisation: ready to step."""
+        if self._v2:
+            self._raw_do_step, self._do_step = _raw(self._fmu, "fmi2DoStep"), self._do_step_2
+            return
+        self._raw_do_step, self._do_step = _raw(self._fmu, "fmi3DoStep"), self._do_step_3
+        # eventHandlingNeeded, terminateSimulation, earlyReturn, lastSuccessfulTime
+        self._flags = tuple(c() for c in (ctypes.c_bool, ctypes.c_bool, ctypes.c_bool, ctypes.c_double))
+        self._step_results = tuple(ctypes.byref(c) for c in self._flags)
+        if self.interface.event_mode:   # exitInitializationMode left it in event mode
+            self.update_discrete_states()
+            self._call("enterStepMode", self._fmu.enterStepMode)
 
     def _instantiate(self) -> None:
         if self._v2:
@@ -211,8 +255,25 @@ class FmuSlave:
             self._callbacks = callbacks   # kept alive as long as the instance
             self._call("instantiate", self._fmu.instantiate, callbacks=callbacks, loggingOn=False)
         else:
-            self._call("instantiate", self._fmu.instantiate, loggingOn=False,
+            self._call("instantiate", self._fmu.instantiate, loggingOn=False, **self._instantiate_options(),
                        logMessage=lambda env, status, category, message: self._logged(status, category, message))
+
+    def _instantiate_options(self) -> dict:
+        event_mode = self.interface.event_mode
+        return {"eventModeUsed": event_mode, "earlyReturnAllowed": event_mode}
+
+    def update_discrete_states(self) -> tuple[bool, float]:
+        """Event mode's fixed-point iteration (FMI 2 newDiscreteStates, FMI 3 updateDiscreteStates):
+        (next time event defined, its time). An FMU asking to terminate, or not settling, stops the run."""
+        update = self._fmu.newDiscreteStates if self._v2 else self._fmu.updateDiscreteStates
+        for _ in range(_MAX_ITERATIONS):
+            more, terminate, _, _, timed, next_time = self._call("updateDiscreteStates", update)
+            if terminate:
+                raise SimulationError(self._failure("the FMU asked to terminate the simulation (event update)"))
+            if not more:
+                return bool(timed), next_time
+        raise SimulationError(self._failure(f"its discrete states did not settle in {_MAX_ITERATIONS} event "
+                                            f"iterations"))
 
     def _logged(self, status, category, message) -> None:
         label = _STATUS[status] if 0 <= status < len(_STATUS) else str(status)
@@ -222,6 +283,8 @@ class FmuSlave:
     def _call(self, function: str, fn, *args, **kwargs):
         try:
             return fn(*args, **kwargs)
+        except SimulationError:
+            raise   # already named (a step's own event handling)
         except FMICallException as exc:
             status = _STATUS[exc.status] if 0 <= exc.status < len(_STATUS) else str(exc.status)
             raise SimulationError(self._failure(f"{exc.function} returned {status}")) from None
@@ -253,7 +316,22 @@ class FmuSlave:
         _check("fmi2DoStep", self._raw_do_step(self._fmu.component, t, h, 1))
 
     def _do_step_3(self, t: float, h: float) -> None:
-        _check("fmi3DoStep", self._raw_do_step(self._fmu.component, t, h, True, *self._step_results))
+        end = t + h
+        for _ in range(self.MAX_EVENTS):
+            _check("fmi3DoStep", self._raw_do_step(self._fmu.component, t, h, True, *self._step_results))
+            events, terminate, early, reached = (f.value for f in self._flags)
+            if terminate:
+                raise SimulationError(self._failure(f"the FMU asked to terminate the simulation (doStep from "
+                                                    f"{t:.9g} s)"))
+            if events and self.interface.event_mode:
+                self.time = reached if early else end
+                self._call("enterEventMode", self._fmu.enterEventMode)
+                self.update_discrete_states()
+                self._call("enterStepMode", self._fmu.enterStepMode)
+            if not early or reached >= end:
+                return
+            t, h = reached, end - reached   # returned early at an event: on to the communication point
+        raise SimulationError(self._failure(f"returned early more than {self.MAX_EVENTS} times in one step"))
 
     def close(self) -> None:
         fmu, self._fmu = self._fmu, None
@@ -273,6 +351,8 @@ def _route_fmi2_log(env, name, status, category, message) -> None:
         slave._logged(status, category, message)
 
 
+#: event iterations one event may take before the FMU is taken to chatter
+_MAX_ITERATIONS = 100
 _fmi2_slaves: dict[int, FmuSlave] = {}
 _environments = itertools.count(1)
 _fmi2_logger = fmi2CallbackLoggerTYPE(_route_fmi2_log)

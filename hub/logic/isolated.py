@@ -8,7 +8,8 @@ import signal
 from hub.core import scratch
 from hub.core.errors import SimulationError
 from hub.core.lifetime import die_with_parent
-from hub.logic.fmi import FmuInterface, FmuSlave
+from hub.logic.fmi import FmuInterface
+from hub.logic.fmi_me import Integration, open_fmu
 
 
 #: s an isolated FMU's step may take before its worker is killed (the fmu module's `step_timeout`)
@@ -29,7 +30,8 @@ class IsolatedFmu:
     on_bus = False
 
     def __init__(self, interface: FmuInterface, instance: str, inputs: list[str], outputs: list[str],
-                 parameters: dict, start_time: float = 0.0, step_timeout: float = STEP_TIMEOUT):
+                 parameters: dict, start_time: float = 0.0, step_timeout: float = STEP_TIMEOUT,
+                 integration: Integration | None = None):
         self.interface = interface
         self.instance = instance
         self.time = start_time
@@ -38,7 +40,7 @@ class IsolatedFmu:
         self._conn, child = context.Pipe()
         self._process = context.Process(
             target=_serve, args=(child, interface, instance, inputs, outputs, parameters, start_time, os.getpid(),
-                                 str(scratch.folder())),
+                                 str(scratch.folder()), integration),
             name=f"planthub-fmu-{instance}", daemon=True)
         self._process.start()
         child.close()
@@ -110,12 +112,12 @@ def probe(interface: FmuInterface) -> str | None:
     return None
 
 
-def _serve(conn, interface, instance, inputs, outputs, parameters, start_time, parent, folder) -> None:
-    """The child: owns one FmuSlave and answers the parent's messages until told to close."""
+def _serve(conn, interface, instance, inputs, outputs, parameters, start_time, parent, folder, integration) -> None:
+    """The child: owns one FMU instance and answers the parent's messages until told to close."""
     die_with_parent(parent)   # a hub killed with SIGKILL takes its FMU workers along
     scratch.adopt(folder)     # and its extracted FMU lies in the hub's folder, which the next run sweeps
     try:
-        slave = FmuSlave(interface, instance, inputs, outputs, parameters, start_time)
+        slave = open_fmu(interface, instance, inputs, outputs, parameters, start_time, integration=integration)
     except SimulationError as exc:
         conn.recv()
         conn.send(("error", str(exc)))

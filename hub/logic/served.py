@@ -1,7 +1,8 @@
 """An FMU served over the bus as a lockstep participant (`planthub serve-fmu FILE`)."""
 from __future__ import annotations
 
-from hub.logic.fmi import FmuSlave, inspect_fmu
+from hub.logic.fmi import inspect_fmu
+from hub.logic.fmi_me import Integration, open_fmu
 from hub.logic.fmi_variables import parameter_values
 from hub.logic.ports import fmu_ports
 from hub.bus.participant import Participant
@@ -13,8 +14,10 @@ class FmuParticipant(Participant):
     (variables in the FMU's order, `events` as void slots, `map` renaming), so the hub checks
     them against the scenario's object of the same name."""
 
-    def __init__(self, file: str, events=(), rename: dict | None = None, instance: str = "fmu"):
+    def __init__(self, file: str, events=(), rename: dict | None = None, instance: str = "fmu",
+                 integration: Integration | None = None):
         self.fmu = inspect_fmu(file)
+        self.integration = integration
         self.instance = instance
         ports = fmu_ports(self.fmu, events, rename)   # the `fmu` module's slot rules
         causality = lambda v: self.fmu.variables[v].causality
@@ -27,8 +30,8 @@ class FmuParticipant(Participant):
 
     def begin(self, parameters: dict, time: float) -> None:
         values = parameter_values(self.fmu.variables, parameters)   # checked as the hub checked them
-        self.slave = FmuSlave(self.fmu, self.instance, [v for _, _, v in self.ports_in],
-                              [v for _, _, v in self.ports_out], values, time)
+        self.slave = open_fmu(self.fmu, self.instance, [v for _, _, v in self.ports_in],
+                              [v for _, _, v in self.ports_out], values, time, integration=self.integration)
 
     def advance(self, t: float, h: float, values: list) -> list:
         self.slave.set_inputs([wire.from_wire(k, x, f"input {n!r}") for (n, k, _), x in zip(self.ports_in, values)])
