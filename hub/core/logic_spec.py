@@ -40,6 +40,10 @@ OPTIONS = {
         "step": {"type": "number", "exclusiveMinimum": 0},
         "on_bad_value": {"enum": ["stop", "hold"]},
         "step_timeout": {"type": "number", "exclusiveMinimum": 0},
+        "interface": {"enum": ["co-simulation", "model-exchange"]},
+        "solver": {"enum": ["cvode", "euler"]},
+        "max_step": {"type": "number", "exclusiveMinimum": 0},
+        "tolerance": {"type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 1},
     },
     "additionalProperties": False,
 }
