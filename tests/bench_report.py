@@ -367,6 +367,7 @@ def cost_sections(report: Report) -> None:
 
     report.add("# What the hub costs, each next to its floor")
     for key, fn, args in (("bottle_models", bench.bottle_models, ()), ("fmu_stepping", bench.fmu_stepping, ()),
+                          ("model_exchange", bench.model_exchange, ()),
                           ("event_latency", bench.event_latency, ()), ("plant_elements", plant_elements, ()),
                           ("flush", bench.flush_cost, ()), ("lockstep", bus_lockstep, ()), ("data_plane", data_plane, ()),
                           ("watched_plant", watched_plant, ()), ("bottling_plant", bottling_plant, ()),
