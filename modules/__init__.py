@@ -17,6 +17,7 @@ CATALOGUE = {
     "separator": "modules.separator:Separator",
     "sink": "modules.sink:Sink",
     "source": "modules.source:Source",
+    "ssp": "modules.ssp:Ssp",
     "station": "modules.station:Station",
     "stopper": "modules.stopper:Stopper",
     "switch": "modules.switch:Switch",

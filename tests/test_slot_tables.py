@@ -41,6 +41,7 @@ from hub.core.resources import BUILT_FMUS
 from hub.core.slots import SlotType
 
 from .helpers import ROOT
+from .ssp_archives import timer_belt
 
 REGISTRY = default_registry()
 HEADER = ["slot", "type", "dir", "meaning"]
@@ -52,6 +53,7 @@ REFERRAL = re.compile(r"^(\w+)\.(\w+\s*)?(…|\.\.\.)$")
 REQUIRED = {
     "constant": {"type": "vec3", "value": [0, 0, 1]},
     "fmu": {"file": str(BUILT_FMUS / "belt_drive-fmi2.fmu")},
+    "ssp": {"file": str(timer_belt())},
 }
 # Parameters that fill in the rows that depend on parameters.
 FILLING = {

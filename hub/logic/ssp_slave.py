@@ -1,0 +1,91 @@
+"""An SSP's FMUs run as one logic slave: its connections routed inside, its system connectors the slave's inputs and outputs."""
+from __future__ import annotations
+
+from hub.core.errors import SimulationError
+from hub.logic.fmi import FmuSlave
+from hub.logic.ssp import SspSystem
+from hub.logic.watchdog import WATCHDOG
+
+
+class SspSlave:
+    """The components of an SSP system, each an FmuSlave, stepped as the master's Jacobi steps
+    separate `fmu` objects (hub/run/algorithms.py), so that an SSP and the same FMUs wired by
+    hand with flows give the same recording, bit for bit.
+
+    There a flow copies an FMU's output, as sensed at the point t, to another's input before
+    either steps from t; here `step(t, h)` hands every component the outputs the others had at t
+    (after initialisation, or their last step), then steps each from t to t + h. The system's
+    inputs are those of the point t, as any slave's; its outputs are read after the step and seen
+    at t + h. A LinearTransformation is applied where it stands; without one a value passes
+    untouched (x · 1 + 0 would turn −0.0 into 0.0). A component input no connection feeds is not
+    written, so it keeps its start value, as an `fmu` object's unfed input does.
+
+    `inputs` and `outputs` are the system connectors in the slave's order (the object's slots).
+    """
+
+    on_bus = False
+
+    def __init__(self, system: SspSystem, instance: str, inputs: list[str], outputs: list[str],
+                 parameters: dict[str, dict], step_timeout: float = 10.0):
+        self.instance = instance
+        self.time = 0.0
+        self._parts: list[FmuSlave] = []
+        names = [p.name for p in system.parts]
+        feeds = {link.end: link for link in system.links}
+        fed = {name: [v for (c, v) in feeds if c == name] for name in names}
+        read = {name: list(dict.fromkeys(link.start[1] for link in system.links if link.start[0] == name))
+                for name in names}
+        system_inputs = {name: k for k, name in enumerate(inputs)}
+
+        def source(link):
+            if link.start[0] is None:
+                return None, system_inputs[link.start[1]], link.scale
+            return names.index(link.start[0]), read[link.start[0]].index(link.start[1]), link.scale
+
+        #: per component, (component or None for the system, position, scale) of each input it is fed
+        self._routes = [[source(feeds[(name, v)]) for v in fed[name]] for name in names]
+        self._out = [source(feeds[(None, o)]) for o in outputs]
+        try:
+            for part in system.parts:
+                slave = FmuSlave(part.fmu, f"{instance}.{part.name}", fed[part.name], read[part.name],
+                                 parameters.get(part.name, {}), step_timeout=step_timeout)
+                WATCHDOG.watch(slave)   # in the hub's process, as every FMU stepped here
+                self._parts.append(slave)
+            self._latest = [slave.outputs() for slave in self._parts]
+        except BaseException:
+            self.close()
+            raise
+        self._inputs: list = [None] * len(inputs)
+
+    def set_inputs(self, values: list) -> None:
+        self._inputs = values
+
+    def _value(self, route):
+        part, k, scale = route
+        value = self._inputs[k] if part is None else self._latest[part][k]
+        return value if scale is None else value * scale[0] + scale[1]
+
+    def step(self, t: float, h: float) -> None:
+        self.time = t
+        # Every input from the outputs of t before any component steps: the order cannot matter.
+        for slave, routes in zip(self._parts, self._routes):
+            if routes:
+                slave.set_inputs([self._value(r) for r in routes])
+        for slave in self._parts:
+            slave.step(t, h)
+        self._latest = [slave.outputs() for slave in self._parts]
+        self.time = t + h
+
+    def outputs(self) -> list:
+        return [self._value(r) for r in self._out]
+
+    def close(self) -> None:
+        failure = None
+        for slave in self._parts:
+            try:
+                slave.close()
+            except Exception as exc:   # free every instance, then tell of the first that refused
+                failure = failure or exc
+        self._parts = []
+        if failure is not None:
+            raise SimulationError(f"SSP instance {self.instance!r}: closing failed: {failure}") from failure
