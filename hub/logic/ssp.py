@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import hashlib
 import posixpath
+import re
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -131,8 +132,8 @@ def override_problems(system: SspSystem, given: dict) -> list[tuple[str, str]]:
         component, _, variable = str(key).partition(".")
         part = parts.get(component)
         if part is None or not variable:
-            problems.append((key, f"{key!r} is not component.variable: {system.path.name} has the components "
-                                  f"{', '.join(sorted(parts))}{did_you_mean(component, parts) if variable else ''}"))
+            problems.append((key, f"{key!r} is not component.variable of a component of {system.path.name}"
+                                  f"{did_you_mean(component, parts)}"))
             continue
         problems += [(key, message) for _, message in
                      parameter_problems(part.fmu.path.name, part.fmu.variables, part.fmu.unmapped, {variable: value})]
@@ -299,10 +300,11 @@ class _Reader:
     def links(self, system, xml, parts, kinds):
         """The connections that pass every check, and the system's ports typed."""
         transformations = [_transformation(c) for c in xml.findall("ssd:Connections/ssd:Connection", _NS)]
-        links, fed, typed = [], {}, {}
+        links, fed, typed, named = [], {}, {}, set()
         for connection, (scale, mapping, suppress) in zip(system.connections, transformations):
             start = (connection.startElement, connection.startConnector)
             end = (connection.endElement, connection.endConnector)
+            named.add(end)
             link = Link(start, end, scale)
             known = True
             for role, at in (("start", start), ("end", end)):
@@ -366,7 +368,8 @@ class _Reader:
                 self.fail(f"system connector {connector.name!r} has no type and no connection gives it one")
                 continue
             if kind == "output" and at not in fed:
-                self.fail(f"system connector {connector.name!r} is an output that no connection feeds")
+                if at not in named:   # one fed by a refused connection is named there
+                    self.fail(f"system connector {connector.name!r} is an output that no connection feeds")
                 continue
             ports[connector.name] = Port(connector.name, kind, slot)
         return links, ports
@@ -455,5 +458,10 @@ def _transformation(connection):
 
 
 def _schema_errors(exc: Exception) -> str:
-    lines = [line.strip() for line in str(exc).splitlines()[1:] if line.strip()]
-    return "; ".join(lines) or str(exc)
+    """fmpy's "ERROR (line 6, column 0): Element '{http://…}Connector' …" lines as "line 6: Element 'ssd:Connector' …"."""
+    lines = [re.sub(r"^\w+ \(line (\d+), column \d+\): ", r"line \1: ", line.strip())
+             for line in str(exc).splitlines()[1:] if line.strip()]
+    text = "; ".join(lines) or str(exc)
+    for prefix, uri in _NS.items():
+        text = text.replace(f"{{{uri}}}", f"{prefix}:")
+    return text
