@@ -243,14 +243,14 @@ def test_a_connector_the_fmu_lacks_is_named_with_a_suggestion(tmp_path, write_sc
     ssd = TIMER_BELT.replace('<ssd:Connector name="remaining" kind="output">',
                              '<ssd:Connector name="remainder" kind="output">')
     found = problems(scene(tmp_path, write_scenario, ssd))
-    assert found[0] == (f"{AT}component 'timer': its connector 'remainder' is no variable of 0-timer.fmu "
+    assert found[0] == (f"{AT}component 'timer': its connector 'remainder' is no variable of timer.fmu "
                         f"(did you mean 'remaining'?)")
 
 
 def test_a_parameter_set_naming_an_unknown_variable_is_named(tmp_path, write_scenario):
     ssv = parameter_set({"timer.perod": ("Real", "0.4"), "timr.period": ("Real", "0.4")})
     assert problems(scene(tmp_path, write_scenario, ssv=ssv)) == [
-        f"{AT}resources/tuning.ssv: parameter 'timer.perod': 0-timer.fmu has no variable 'perod' that can be set "
+        f"{AT}resources/tuning.ssv: parameter 'timer.perod': timer.fmu has no variable 'perod' that can be set "
         f"(did you mean 'period'?)",
         f"{AT}resources/tuning.ssv: parameter 'timr.period' names no component (a system's parameter is "
         f"component.variable) (did you mean 'timer'?)"]
@@ -287,7 +287,7 @@ def test_the_scenarios_parameters_are_checked_at_their_line(tmp_path, write_scen
     text = WITH_SSP.replace("    file: ctl.ssp\n", "    file: ctl.ssp\n    parameters:\n      timer.perod: 1\n"
                                                    "      belt.period: 1\n")
     assert problems(scene(tmp_path, write_scenario, text=text)) == [
-        "scene.yaml:12: objects.ctl.parameters.timer.perod: 0-timer.fmu has no variable 'perod' that can be set "
+        "scene.yaml:12: objects.ctl.parameters.timer.perod: timer.fmu has no variable 'perod' that can be set "
         "(did you mean 'period'?)",
         "scene.yaml:13: objects.ctl.parameters.belt.period: 'belt.period' is not component.variable of a component "
         "of ctl.ssp (known: drive, timer)"]
@@ -304,4 +304,15 @@ def test_the_fmus_are_extracted_to_the_scratch_folder_not_beside_the_scenario(tm
 
     run_scenario(scene(tmp_path, write_scenario), tmp_path / "out")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ctl.ssp", "out", "scene.yaml"]
-    assert list((scratch.folder() / "ssp").glob("*/0-timer.fmu"))
+    assert list((scratch.folder() / "ssp").glob("*/0/timer.fmu"))
+
+
+def test_the_readme_example_runs(tmp_path):
+    """README's block under "A controller from an SSP", with timer_belt.ssp beside it."""
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    block = readme[readme.index("<!-- example: a controller from an SSP -->"):]
+    block = block[block.index("```yaml\n") + 8:block.index("\n```", block.index("```yaml\n"))]
+    write_ssp(tmp_path / "timer_belt.ssp")
+    (tmp_path / "scene.yaml").write_text(block)
+    run_scenario(tmp_path / "scene.yaml", tmp_path / "out")
+    assert fired_at(tmp_path / "out") == 0.5

@@ -251,10 +251,10 @@ class _Reader:
                 if source not in self.names:
                     self.fail(f"component {component.name!r}: its FMU {component.source!r} is not in the archive")
                     continue
-                # Named by position, not by the archive's path: a member name must not place a file.
-                target = folder / f"{n}-{Path(source).name}"
+                # In a folder of its position, not the archive's path: a member name must not place a file.
+                target = folder / str(n) / Path(source).name
                 if not target.is_file():
-                    folder.mkdir(parents=True, exist_ok=True)
+                    target.parent.mkdir(parents=True, exist_ok=True)
                     target.write_bytes(archive.read(source))
                 try:
                     fmu = inspect_fmu(target)
