@@ -316,3 +316,36 @@ def test_the_readme_example_runs(tmp_path):
     (tmp_path / "scene.yaml").write_text(block)
     run_scenario(tmp_path / "scene.yaml", tmp_path / "out")
     assert fired_at(tmp_path / "out") == 0.5
+
+
+def test_an_unfed_component_input_keeps_the_start_its_parameter_set_gives(tmp_path, write_scenario):
+    """drive.run fed by no connection but set true by the .ssv: the run of `go` wired to it."""
+    run_scenario(scene(tmp_path, write_scenario), tmp_path / "wired")
+    ssd = TIMER_BELT.replace('<ssd:Connection startConnector="go" endElement="drive" endConnector="run"/>', "")
+    ssv = parameter_set({"timer.period": ("Real", "0.8"), "drive.run": ("Boolean", "true")})
+    run_scenario(scene(tmp_path, write_scenario, ssd, ssv), tmp_path / "started")
+    assert (tmp_path / "started" / "recording.csv").read_bytes() == (tmp_path / "wired" / "recording.csv").read_bytes()
+
+
+def test_one_fmu_makes_two_components(tmp_path, write_scenario):
+    """A second timer from the same resources/timer.fmu, started when the first fires."""
+    later = ('      <ssd:Component name="later" source="resources/timer.fmu">\n        <ssd:Connectors>\n'
+             '          <ssd:Connector name="start" kind="input"><ssc:Boolean/></ssd:Connector>\n'
+             '          <ssd:Connector name="elapsed" kind="output"><ssc:Boolean/></ssd:Connector>\n'
+             '        </ssd:Connectors>\n      </ssd:Component>\n')
+    ssd = (TIMER_BELT.replace("    </ssd:Elements>", later + "    </ssd:Elements>")
+           .replace('      <ssd:Connector name="done" kind="output"><ssc:Boolean/></ssd:Connector>\n',
+                    '      <ssd:Connector name="done" kind="output"><ssc:Boolean/></ssd:Connector>\n'
+                    '      <ssd:Connector name="later_done" kind="output"><ssc:Boolean/></ssd:Connector>\n')
+           .replace("    </ssd:Connections>",
+                    '      <ssd:Connection startElement="timer" startConnector="elapsed" endElement="later" '
+                    'endConnector="start"/>\n      <ssd:Connection startElement="later" startConnector="elapsed" '
+                    'endConnector="later_done"/>\n    </ssd:Connections>'))
+    ssv = parameter_set({"timer.period": ("Real", "0.8"), "later.period": ("Real", "0.3")})
+    text = WITH_SSP.replace("record: [", "record: [ctl.logic.later_done, ")
+    run_scenario(scene(tmp_path, write_scenario, ssd, ssv, text), tmp_path / "out")
+    data = rows(tmp_path / "out" / "recording.csv")
+    assert fired_at(tmp_path / "out") == 0.8
+    # The first timer's output of the point 0.8 s arms the second for its step from 0.8 s, as a
+    # flow between two fmu objects would: it fires 0.3 s later.
+    assert next(float(r["time"]) for r in data if r["ctl.logic.later_done"] == "1") == pytest.approx(1.1)

@@ -15,7 +15,8 @@ input and output (the object's slots); connections from a system input or a comp
 to a component's input or a system output, of one slot type, with an optional
 LinearTransformation between reals; parameter sets applied as start values. Everything else —
 nested systems, components that are not FMUs, signal dictionaries, parameter mappings, mapping
-transformations, unit conversions — is refused by name, never ignored.
+transformations, unit conversions — is refused by name, never ignored. A parameter's unit in an
+.ssv is taken to be its variable's: it is not converted.
 """
 from __future__ import annotations
 
@@ -25,6 +26,9 @@ import re
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from fmpy.ssp.ssd import Component, System, read_ssd, validate_tree
+from lxml import etree
 
 from hub.core import scratch
 from hub.core.errors import PlanthubError
@@ -169,9 +173,6 @@ class _Reader:
             raise SspError(self.path, self.problems)
 
     def read(self) -> SspSystem:
-        from lxml import etree
-        from fmpy.ssp.ssd import read_ssd, validate_tree
-
         if not zipfile.is_zipfile(self.path):
             raise SspError(self.path, ["not an SSP (an SSP is a zip archive)"])
         with zipfile.ZipFile(self.path) as archive:
@@ -191,7 +192,7 @@ class _Reader:
         self.stop_if_failed()
         system = read_ssd(str(self.path), validate=False).system
         xml = root.find("ssd:System", _NS)
-        self.unsupported(system, xml)
+        self.unsupported(system)
         self.stop_if_failed()
         parts = self.parts(system)
         kinds = self.connectors(system, xml, parts)
@@ -204,9 +205,6 @@ class _Reader:
 
     def parameter_files(self, root, archive) -> None:
         """Every .ssv a binding names is in the archive and valid (before fmpy opens it)."""
-        from lxml import etree
-        from fmpy.ssp.ssd import validate_tree
-
         for binding in root.iter(f"{{{_NS['ssd']}}}ParameterBinding"):
             source, kind = binding.get("source"), binding.get("type", _SSV_TYPE)
             if kind != _SSV_TYPE:
@@ -220,9 +218,7 @@ class _Reader:
                     self.fail(f"the parameter set {source!r} does not validate against the SSP 1.0 schema: "
                               f"{_schema_errors(exc)}")
 
-    def unsupported(self, system, xml) -> None:
-        from fmpy.ssp.ssd import Component, System
-
+    def unsupported(self, system) -> None:
         for element in system.elements:
             if isinstance(element, System):
                 self.fail(f"nested system {element.name!r}: not supported (planthub runs one flat system of FMUs)")
@@ -239,8 +235,6 @@ class _Reader:
                 if binding.parameterMapping:
                     self.fail(f"{_owner(owner, system)}: a ParameterMapping: not supported (parameter names must "
                               f"be the variables' own)")
-        if xml.find("ssd:Elements/ssd:Component/ssd:Elements", _NS) is not None:
-            self.fail("a component with elements of its own: not supported")
 
     def parts(self, system) -> dict[str, Part]:
         folder = scratch.folder() / "ssp" / hashlib.sha1(repr(self.key).encode()).hexdigest()[:12]
