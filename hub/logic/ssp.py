@@ -34,7 +34,7 @@ from hub.core import scratch
 from hub.core.errors import PlanthubError
 from hub.core.registry import did_you_mean
 from hub.core.slots import SlotType
-from hub.logic.fmi import FmuError, FmuInterface, inspect_fmu
+from hub.logic.fmi import CO_SIMULATION, FmuError, FmuInterface, inspect_fmu
 from hub.logic.fmi_variables import parameter_problems, parameter_values
 
 SSD = "SystemStructure.ssd"
@@ -255,7 +255,7 @@ class _Reader:
                 except FmuError as exc:
                     self.fail(f"component {component.name!r} ({source}): {str(exc).split(': ', 1)[-1]}")
                     continue
-                if "co-simulation" not in getattr(fmu, "interfaces", ("co-simulation",)):
+                if CO_SIMULATION not in fmu.interfaces:
                     self.fail(f"component {component.name!r} ({source}) offers no co-simulation interface: an SSP's "
                               f"FMUs step themselves here")
                     continue
@@ -263,7 +263,8 @@ class _Reader:
         return parts
 
     def connectors(self, system, xml, parts):
-        """The system's ports, and each end's (kind, slot type) as far as it is known."""
+        """(component or None for the system, connector) → (its kind or its variable's causality, its
+        slot type — None for a system connector of no declared type —, its declared unit or None)."""
         declared = _declared(xml)
         kinds: dict[tuple[str | None, str], tuple[str, SlotType | None, str | None]] = {}
         for connector in system.connectors:
@@ -301,7 +302,7 @@ class _Reader:
             named.add(end)
             link = Link(start, end, scale)
             known = True
-            for role, at in (("start", start), ("end", end)):
+            for at in (start, end):
                 if at[0] is not None and at[0] not in {e.name for e in system.elements}:
                     self.fail(f"connection {link}: no component {at[0]!r}"
                               f"{did_you_mean(at[0], [e.name for e in system.elements])}")
