@@ -13,7 +13,9 @@ Each FMU component of the SSD's system is one FMU instance; each connection eith
 them or a system connector to a component's variable. They run as one slave in the hub's process
 (hub/logic/ssp_slave.py), stepped as `run.master: jacobi` steps separate `fmu` objects: every
 component steps from t with the others' outputs of t, so the SSP gives the recording of the same
-FMUs placed as `fmu` objects and wired by hand with flows, bit for bit. `run.master: gauss-seidel`
+FMUs placed as `fmu` objects and wired by hand with flows, bit for bit. A non-finite real passed
+from one FMU to another stops the run naming it, as it would entering a flow (`on_bad_value`
+applies to the system's outputs only). `run.master: gauss-seidel`
 is refused: under it the hand-wired FMUs would hand fresh values over within a step, in an order
 the scenario's flows decide, which one object cannot reproduce faithfully for every wiring.
 

@@ -13,7 +13,7 @@ import csv
 
 import pytest
 
-from hub.core.errors import ScenarioError
+from hub.core.errors import ScenarioError, SimulationError
 from hub.scenario.checker import load_scenario
 
 from .fmus.fmu_support import build
@@ -349,3 +349,31 @@ def test_one_fmu_makes_two_components(tmp_path, write_scenario):
     # The first timer's output of the point 0.8 s arms the second for its step from 0.8 s, as a
     # flow between two fmu objects would: it fires 0.3 s later.
     assert next(float(r["time"]) for r in data if r["ctl.logic.later_done"] == "1") == pytest.approx(1.1)
+
+
+@pytest.fixture(scope="module")
+def faulty(tmp_path_factory):
+    """The test-only `faulty` model (tests/fmu_models/faulty): its `level` turns NaN at step `nan_at`."""
+    return build(tmp_path_factory.mktemp("faulty"), models_dir=ROOT / "tests" / "fmu_models")
+
+
+def test_a_nan_between_two_fmus_stops_the_run_naming_the_output(faulty, tmp_path, write_scenario):
+    """No flow carries it, so the SSP checks it as a flow's source would be: faulty.level → drive.speed_setpoint."""
+    ssd = (TIMER_BELT.replace('name="timer" source="resources/timer.fmu"', 'name="faulty" source="resources/faulty.fmu"')
+           .replace('<ssd:Connector name="start" kind="input"><ssc:Boolean/></ssd:Connector>',
+                    '<ssd:Connector name="fail" kind="input"><ssc:Boolean/></ssd:Connector>')
+           .replace('<ssd:Connector name="elapsed" kind="output"><ssc:Boolean/></ssd:Connector>', "")
+           .replace('<ssd:Connector name="remaining" kind="output"><ssc:Real unit="s"/></ssd:Connector>',
+                    '<ssd:Connector name="level" kind="output"><ssc:Real/></ssd:Connector>')
+           .replace('<ssd:Connection startConnector="blocked" endElement="timer" endConnector="start"/>', "")
+           .replace('startElement="timer" startConnector="remaining"', 'startElement="faulty" startConnector="level"')
+           .replace('<ssd:Connection startElement="timer" startConnector="elapsed" endConnector="done"/>', "")
+           .replace('<ssd:Connector name="done" kind="output"><ssc:Boolean/></ssd:Connector>', ""))
+    fmus = {"resources/faulty.fmu": faulty / "faulty-fmi2.fmu",
+            "resources/belt_drive.fmu": BUILT / "belt_drive-fmi2.fmu"}
+    text = WITH_SSP.replace("ctl.logic.done, ", "")
+    path = scene(tmp_path, write_scenario, ssd, parameter_set({"faulty.nan_at": ("Integer", "4")}), text, fmus=fmus)
+    with pytest.raises(SimulationError) as info:
+        run_scenario(path, tmp_path / "out")
+    assert str(info.value) == ("SSP instance 'ctl': faulty.level gave nan at t = 0.08 s; a non-finite value is not "
+                               "passed on to another FMU, so the run stops here")

@@ -45,6 +45,11 @@ class SspSlave:
         #: per component, (component or None for the system, position, scale) of each input it is fed
         self._routes = [[source(feeds[(name, v)]) for v in fed[name]] for name in names]
         self._out = [source(feeds[(None, o)]) for o in outputs]
+        #: (component, position, name) of each output that feeds another component: no LogicComponent
+        #: sees it, so its finiteness is checked here, as a flow's source would be (hub/logic/component.py)
+        self._internal = tuple(dict.fromkeys((names.index(link.start[0]), read[link.start[0]].index(link.start[1]),
+                                              f"{link.start[0]}.{link.start[1]}")
+                                             for link in system.links if None not in (link.start[0], link.end[0])))
         try:
             for part in system.parts:
                 slave = FmuSlave(part.fmu, f"{instance}.{part.name}", fed[part.name], read[part.name],
@@ -75,6 +80,11 @@ class SspSlave:
             slave.step(t, h)
         self._latest = [slave.outputs() for slave in self._parts]
         self.time = t + h
+        for part, k, name in self._internal:
+            value = self._latest[part][k]
+            if isinstance(value, float) and value - value != 0.0:   # NaN or ±inf
+                raise SimulationError(f"SSP instance {self.instance!r}: {name} gave {value!r} at t = {t + h:.9g} s; "
+                                      f"a non-finite value is not passed on to another FMU, so the run stops here")
 
     def outputs(self) -> list:
         return [self._value(r) for r in self._out]
