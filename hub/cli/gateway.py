@@ -42,6 +42,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="lockstep: s to wait for the PLC to set plc_ready before joining the plant")
     parser.add_argument("--user", metavar="NAME",
                         help="opcua: only this user may connect; the password is taken from PLANTHUB_OPCUA_PASSWORD")
+    parser.add_argument("--certificate", type=Path, metavar="CERT",
+                        help="opcua: the server's application certificate (PEM or DER, its application URI in "
+                             "subjectAltName); with --private-key the endpoint offers Basic256Sha256 Sign and "
+                             "SignAndEncrypt only")
+    parser.add_argument("--private-key", type=Path, metavar="KEY", help="opcua: the certificate's RSA key (PEM or DER)")
+    parser.add_argument("--trust", type=Path, action="append", default=[], metavar="CLIENT_CERT",
+                        help="opcua: admit only clients presenting this certificate (repeatable, or a folder of "
+                             "them); without it any client with a valid certificate")
     add_set(parser)
     add_options(parser)
 
@@ -77,11 +85,12 @@ def run(args) -> int:
         if args.protocol != "opcua" or not password:
             parser.error("--user: only for opcua, with the password in PLANTHUB_OPCUA_PASSWORD")
         user = (args.user, password)
+    certificates = _certificates(parser, args)
     image = ProcessImage(tags)
     endpoint = args.endpoint or ENDPOINTS[args.protocol]
     if args.protocol == "opcua":
         from hub.gateway.opcua import OpcUaServer
-        protocol = OpcUaServer(image, endpoint, user)
+        protocol = OpcUaServer(image, endpoint, user, certificates)
     else:
         from hub.gateway.modbus import ModbusServer
         protocol = ModbusServer(image, endpoint)
@@ -99,3 +108,19 @@ def run(args) -> int:
             _log.warning(f"gateway {args.object!r}: {image.refused} writes refused (each logged above)")
         return status
 
+
+def _certificates(parser, args):
+    """The files of --certificate, --private-key and --trust read and checked (None: no security asked for)."""
+    from hub.cli.exits import UsageError
+    from hub.gateway.certificates import CertificateError, load_certificates
+
+    if not (args.certificate or args.private_key or args.trust):
+        return None
+    if args.protocol != "opcua":
+        parser.error("--certificate, --private-key, --trust: only for opcua (Modbus TCP has no security of its own)")
+    if not (args.certificate and args.private_key):
+        parser.error("--certificate and --private-key go together (--trust needs both)")
+    try:
+        return load_certificates(args.certificate, args.private_key, args.trust)
+    except CertificateError as exc:
+        raise UsageError(str(exc)) from exc

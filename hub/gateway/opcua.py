@@ -8,6 +8,12 @@ writable. A write is refused with the protocol's own status: an unknown node Bad
 PLC input BadUserAccessDenied (asyncua, for every user but an admin), a value of another type
 BadTypeMismatch, a value out of the tag's range or not finite BadOutOfRange; each refusal is logged
 and nothing reaches the plant. Clients subscribe with their own sampling interval.
+
+Security: with `Certificates` the endpoint offers Basic256Sha256 Sign and SignAndEncrypt only, the
+server's application URI taken from its certificate; a client's certificate must be valid (its time
+range, its application URI) and, when trusted ones are given, one of them. asyncua 2.1.0 still lets
+a client that ignores the endpoint list open a session on an unsecured channel, so every session
+without a channel certificate is refused here too (BadUserAccessDenied).
 """
 from __future__ import annotations
 
@@ -16,8 +22,11 @@ import logging
 
 from asyncua import Server, ua
 from asyncua.crypto.permission_rules import User, UserRole
+from asyncua.crypto.validator import CertificateValidator, CertificateValidatorOptions
 from asyncua.server.address_space import AttributeService
+from cryptography.hazmat.primitives.serialization import Encoding
 
+from hub.gateway.certificates import Certificates
 from hub.gateway.image import ProcessImage
 from hub.gateway.tags import OUTPUT, Tag, namespace
 
@@ -30,17 +39,22 @@ for _name in ("asyncua", "asyncua.server", "asyncua.server.address_space"):
 class OpcUaServer:
     """The tags of `image` served at `endpoint` (opc.tcp://HOST:PORT/PATH)."""
 
-    def __init__(self, image: ProcessImage, endpoint: str, user: tuple[str, str] | None = None):
-        self.image, self.endpoint, self.user = image, endpoint, user
+    def __init__(self, image: ProcessImage, endpoint: str, user: tuple[str, str] | None = None,
+                 certificates: Certificates | None = None):
+        self.image, self.endpoint, self.user, self.certificates = image, endpoint, user, certificates
         self.server = None
         self.nodes = {}        # slot → NodeId
 
     async def start(self) -> None:
-        server = Server(user_manager=_OneUser(self.user) if self.user else None)
+        users = _Users(self.user, secured=self.certificates is not None)
+        server = Server(user_manager=users if self.user or self.certificates else None)
         await server.init()
         server.set_endpoint(self.endpoint)
         server.set_server_name(f"planthub gateway: {self.image.tags.run}")
-        server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
+        if self.certificates is None:
+            server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
+        else:
+            await self._secure(server, self.certificates)
         if self.user:
             server.set_identity_tokens([ua.UserNameIdentityToken])
         ns = await server.register_namespace(namespace(self.image.tags.run))
@@ -66,6 +80,18 @@ class OpcUaServer:
                                                           {self.nodes[t.slot]: t for t in self.image.tags.tags})
         await server.start()
         self.server = server
+
+    @staticmethod
+    async def _secure(server: Server, certificates: Certificates) -> None:
+        await server.set_application_uri(certificates.application_uri)
+        await server.load_certificate(certificates.certificate, format="der")
+        await server.load_private_key(certificates.private_key, format="pem")
+        server.set_security_policy([ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt,
+                                    ua.SecurityPolicyType.Basic256Sha256_Sign])
+        options = CertificateValidatorOptions.BASIC_VALIDATION
+        if certificates.trusted:
+            options |= CertificateValidatorOptions.TRUSTED
+        server.set_certificate_validator(CertificateValidator(options, _Pinned(certificates.trusted)))
 
     async def publish(self, changed: dict) -> None:
         for slot, value in changed.items():
@@ -126,13 +152,30 @@ class _CheckedWrites(AttributeService):
         return None
 
 
-class _OneUser:
-    """One user name and password; anyone else is refused (asyncua answers BadUserAccessDenied)."""
+class _Users:
+    """Who may open a session: on a secured gateway only a client on a channel with a certificate
+    (asyncua passes the channel's client certificate here), and with a user only that user and
+    password; anyone else is refused (asyncua answers BadUserAccessDenied)."""
 
-    def __init__(self, user: tuple[str, str]):
-        self.name, self.password = user
+    def __init__(self, user: tuple[str, str] | None, secured: bool):
+        self.user, self.secured = user, secured
 
     def get_user(self, iserver, username=None, password=None, certificate=None):
-        if username == self.name and password == self.password:
-            return User(role=UserRole.User, name=username)
-        return None
+        if self.secured and not certificate:
+            return None
+        if self.user is not None and (username, password) != self.user:
+            return None
+        return User(role=UserRole.User, name=username)
+
+
+class _Pinned:
+    """The trust store asyncua's certificate validator asks: exactly the certificates given are trusted."""
+
+    def __init__(self, trusted: tuple[bytes, ...]):
+        self.trusted = set(trusted)
+
+    def is_trusted(self, certificate) -> bool:
+        return certificate.public_bytes(Encoding.DER) in self.trusted
+
+    def is_revoked(self, certificate) -> bool:
+        return False
