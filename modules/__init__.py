@@ -5,6 +5,7 @@ CATALOGUE = {
     "clock": "modules.clock:ClockModule",
     "connector": "modules.connector:Connector",
     "constant": "modules.constant:Constant",
+    "convert": "modules.convert:Convert",
     "conveyor": "modules.conveyor:Conveyor",
     "curve": "modules.curve:Curve",
     "fmu": "modules.fmu:Fmu",
