@@ -52,5 +52,5 @@ if __name__ == "__main__":   # python -m tests.foreign_fmus OUT: the stand-in FM
 
     folder = Path(sys.argv[1] if len(sys.argv) > 1 else "build/foreign")
     folder.mkdir(parents=True, exist_ok=True)
-    for name, version in (("enum2", 2), ("typed3", 3), ("ball2", 2), ("tank3", 3), ("ticks3", 3)):
+    for name, version in (("enum2", 2), ("typed3", 3), ("ball2", 2), ("tank3", 3), ("ticks3", 3), ("stair", 3)):
         print(build(name, version, folder))
