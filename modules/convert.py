@@ -217,8 +217,6 @@ class Convert(Module):
                     if low == high:
                         problems.append((("scale", end), f"a range of zero width ({low:g} … {high:g}): "
                                          + ("no slope maps it" if end == "from" else f"every value would give {low:g}")))
-                if target == "int" and not all(INT_RANGE[0] <= v <= INT_RANGE[1] for v in params["scale"]["to"]):
-                    problems.append((("scale", "to"), "beyond a 64-bit int slot"))
         elif source == target:
             problems.append((("to",), f"from and to are both {source} and there is no scale: nothing to convert "
                                       "(connect the slots directly)"))
@@ -230,8 +228,8 @@ class Convert(Module):
         if "threshold" in params and not thresholded:
             problems.append((("threshold",), f"a threshold is for real → bool, not {way}"
                              + (" (int → bool is true for any value but 0)" if source == "int" and target == "bool" else "")))
-        if "hysteresis" in params and not ("threshold" in params and thresholded):
-            problems.append((("hysteresis",), "hysteresis goes with a threshold (real → bool)"))
+        if "hysteresis" in params and not thresholded:
+            problems.append((("hysteresis",), f"hysteresis goes with a threshold, for real → bool, not {way}"))
         if thresholded and "threshold" not in params:
             problems.append(((), "real → bool needs a threshold: true above it"))
         if "levels" in params:
