@@ -116,7 +116,7 @@ def _scaling(params: dict, clamp_always: bool) -> Callable:
     def scale(x):
         if x < lo or x > hi:
             if not clamp:
-                raise ValueError(f"{x!r} is outside scale.from {a:g} … {b:g} (out_of_range: stop)")
+                raise ValueError(f"{x!r} is outside scale.from {a} … {b} (out_of_range: stop)")
             x = lo if x < lo else hi
         s = (x - a) / width
         return c * (1.0 - s) + d * s
@@ -215,8 +215,8 @@ class Convert(Module):
                 for end in ("from", "to"):
                     low, high = params["scale"][end]
                     if low == high:
-                        problems.append((("scale", end), f"a range of zero width ({low:g} … {high:g}): "
-                                         + ("no slope maps it" if end == "from" else f"every value would give {low:g}")))
+                        problems.append((("scale", end), f"a range of zero width ({low} … {high}): "
+                                         + ("no slope maps it" if end == "from" else f"every value would give {low}")))
         elif source == target:
             problems.append((("to",), f"from and to are both {source} and there is no scale: nothing to convert "
                                       "(connect the slots directly)"))
