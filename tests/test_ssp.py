@@ -5,7 +5,8 @@
                                  timer.remaining   ──► drive.speed_setpoint
     belt.drive.speed ◄── ctl.logic.speed ◄──────────── drive.speed
 
-The archives are built here (tests/ssp_archives.py) from build/fmus' timer and belt_drive.
+The archives are built here (tests/ssp_archives.py) from build/fmus' timer and belt_drive, and one
+with the model-exchange stand-in tank3 (tests/fmu_models/foreign).
 """
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ from hub.scenario.checker import load_scenario
 
 from .fmus.fmu_support import build
 from .helpers import ROOT, run_scenario
-from .ssp_archives import TIMER_BELT, TUNING, parameter_set, write_ssp
+from .ssp_archives import HEAD, TIMER_BELT, TUNING, parameter_set, write_ssp
 
 BUILT = ROOT / "build" / "fmus"
 
@@ -377,3 +378,56 @@ def test_a_nan_between_two_fmus_stops_the_run_naming_the_output(faulty, tmp_path
         run_scenario(path, tmp_path / "out")
     assert str(info.value) == ("SSP instance 'ctl': faulty.level gave nan at t = 0.08 s; a non-finite value is not "
                                "passed on to another FMU, so the run stops here")
+
+
+TANK = """\
+  <ssd:System name="filler">
+    <ssd:Connectors>
+      <ssd:Connector name="inflow" kind="input"><ssc:Real/></ssd:Connector>
+      <ssd:Connector name="level" kind="output"><ssc:Real/></ssd:Connector>
+      <ssd:Connector name="full" kind="output"><ssc:Boolean/></ssd:Connector>
+    </ssd:Connectors>
+    <ssd:Elements>
+      <ssd:Component name="tank" source="resources/tank3.fmu">
+        <ssd:Connectors>
+          <ssd:Connector name="inflow" kind="input"><ssc:Real/></ssd:Connector>
+          <ssd:Connector name="level" kind="output"><ssc:Real/></ssd:Connector>
+          <ssd:Connector name="full" kind="output"><ssc:Boolean/></ssd:Connector>
+        </ssd:Connectors>
+      </ssd:Component>
+    </ssd:Elements>
+    <ssd:Connections>
+      <ssd:Connection startConnector="inflow" endElement="tank" endConnector="inflow"/>
+      <ssd:Connection startElement="tank" startConnector="level" endConnector="level"/>
+      <ssd:Connection startElement="tank" startConnector="full" endConnector="full"/>
+    </ssd:Connections>
+  </ssd:System>
+</ssd:SystemStructureDescription>
+"""
+
+
+def test_a_model_exchange_component_is_integrated_as_an_fmu_object_would_be(tmp_path, write_scenario):
+    """tank3 (FMI 3, model exchange only) inside an SSP: the level and `full` recorded byte for byte as
+    the same FMU as an `fmu` object records them (CVODE with its defaults in both)."""
+    from .foreign_fmus import build as build_foreign
+
+    tank = build_foreign("tank3", 3, tmp_path / "foreign")
+    write_ssp(tmp_path / "filler.ssp", HEAD + TANK, None, fmus={"resources/tank3.fmu": tank})
+    common = """\
+        planthub: 1
+        run: {duration: 4.0, physics_rate: 100, communication_step: 0.02}
+        objects:
+          inflow: {module: constant, type: real, value: 0.1}
+          %s
+        flows:
+          - {from: inflow.value.out, to: %s.logic.inflow, when: target}
+        record: [%s.logic.level, %s.logic.full]
+        """
+    in_ssp = write_scenario(common % ("tank: {module: ssp, file: filler.ssp}", "tank", "tank", "tank"), "ssp.yaml")
+    alone = write_scenario(common % (f"tank: {{module: fmu, file: {tank}}}", "tank", "tank", "tank"), "fmu.yaml")
+    run_scenario(in_ssp, tmp_path / "ssp")
+    run_scenario(alone, tmp_path / "fmu")
+    recorded = (tmp_path / "ssp" / "recording.csv").read_bytes()
+    assert recorded == (tmp_path / "fmu" / "recording.csv").read_bytes()
+    assert b",1\n" in recorded   # the tank filled within the run: the state event was integrated to
+

@@ -10,7 +10,8 @@ transformation), and `suppressUnitConversion`. Each .ssv a binding names is look
 validated here before fmpy reads it, because fmpy reports a missing one as a bare KeyError and an
 invalid one as "Failed to validate SystemStructure.ssd".
 
-What is supported: one flat system of co-simulation FMU components; system connectors of kind
+What is supported: one flat system of FMU components (co-simulation, or model exchange integrated
+by the hub with its default solver, as an `fmu` object would be); system connectors of kind
 input and output (the object's slots); connections from a system input or a component's output
 to a component's input or a system output, of one slot type, with an optional
 LinearTransformation between reals; parameter sets applied as start values. Everything else —
@@ -34,7 +35,7 @@ from hub.core import scratch
 from hub.core.errors import PlanthubError
 from hub.core.registry import did_you_mean
 from hub.core.slots import SlotType
-from hub.logic.fmi import CO_SIMULATION, FmuError, FmuInterface, inspect_fmu
+from hub.logic.fmi import FmuError, FmuInterface, inspect_fmu
 from hub.logic.fmi_variables import parameter_problems, parameter_values
 
 SSD = "SystemStructure.ssd"
@@ -254,10 +255,6 @@ class _Reader:
                     fmu = inspect_fmu(target)
                 except FmuError as exc:
                     self.fail(f"component {component.name!r} ({source}): {str(exc).split(': ', 1)[-1]}")
-                    continue
-                if CO_SIMULATION not in fmu.interfaces:
-                    self.fail(f"component {component.name!r} ({source}) offers no co-simulation interface: an SSP's "
-                              f"FMUs step themselves here")
                     continue
                 parts[component.name] = Part(component.name, fmu)
         return parts

@@ -3,12 +3,13 @@ from __future__ import annotations
 
 from hub.core.errors import SimulationError
 from hub.logic.fmi import FmuSlave
+from hub.logic.fmi_me import open_fmu
 from hub.logic.ssp import SspSystem
 from hub.logic.watchdog import WATCHDOG
 
 
 class SspSlave:
-    """The components of an SSP system, each an FmuSlave, stepped as the master's Jacobi steps
+    """The components of an SSP system, each an FMU instance, stepped as the master's Jacobi steps
     separate `fmu` objects (hub/run/algorithms.py), so that an SSP and the same FMUs wired by
     hand with flows give the same recording, bit for bit.
 
@@ -52,7 +53,7 @@ class SspSlave:
                                              for link in system.links if None not in (link.start[0], link.end[0])))
         try:
             for part in system.parts:
-                slave = FmuSlave(part.fmu, f"{instance}.{part.name}", fed[part.name], read[part.name],
+                slave = open_fmu(part.fmu, f"{instance}.{part.name}", fed[part.name], read[part.name],
                                  parameters.get(part.name, {}), step_timeout=step_timeout)
                 WATCHDOG.watch(slave)   # in the hub's process, as every FMU stepped here
                 self._parts.append(slave)
