@@ -4,6 +4,7 @@ reads and writes tags over SignAndEncrypt, one without security or with an untru
 refused; each unusable certificate, key or trusted certificate is named with its file and cause."""
 import asyncio
 import csv
+import dataclasses
 import subprocess
 import sys
 
@@ -116,6 +117,24 @@ def test_a_client_without_security_an_untrusted_certificate_or_a_wrong_password_
     monkeypatch.setattr(Client, "find_endpoint", staticmethod(lambda endpoints, mode, policy: endpoints[0]))
     assert asyncio.run(session(endpoint)) == "BadUserAccessDenied"
     assert image.outputs()["speed"] == 0.0   # none of them wrote
+
+
+def test_trust_is_judged_on_the_channels_certificate_not_on_the_one_a_client_names(secured, pki, monkeypatch):
+    """A stranger on a channel of its own certificate that names no certificate in CreateSession
+    (asyncua's validator then checks nothing), or names the trusted PLC's public one: refused."""
+    from asyncua.client.ua_client import UaClient
+
+    image, endpoint = secured
+    original = UaClient.create_session
+    for named in (None, pki["plc"][0].read_bytes()):
+        async def create_session(self, parameters, named=named):
+            if named is not None:
+                named = x509.load_pem_x509_certificate(named).public_bytes(Encoding.DER)
+            return await original(self, dataclasses.replace(parameters, ClientCertificate=named))
+        monkeypatch.setattr(UaClient, "create_session", create_session)
+        assert asyncio.run(session(endpoint, pki["stranger"])) == "BadUserAccessDenied"
+        assert asyncio.run(session(endpoint, pki["plc"])) == "connected: B001"   # the PLC still gets in
+    assert image.outputs()["speed"] == 0.5   # only the PLC wrote
 
 
 def test_without_trust_any_client_with_a_valid_certificate_is_admitted(tmp_path, pki):

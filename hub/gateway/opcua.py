@@ -46,7 +46,8 @@ class OpcUaServer:
         self.nodes = {}        # slot → NodeId
 
     async def start(self) -> None:
-        users = _Users(self.user, secured=self.certificates is not None)
+        users = _Users(self.user, secured=self.certificates is not None,
+                       trusted=self.certificates.trusted if self.certificates else ())
         server = Server(user_manager=users if self.user or self.certificates else None)
         await server.init()
         server.set_endpoint(self.endpoint)
@@ -55,8 +56,8 @@ class OpcUaServer:
             server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
         else:
             await self._secure(server, self.certificates)
-        if self.user:
-            server.set_identity_tokens([ua.UserNameIdentityToken])
+        # No X509 identity token: the channel's own certificate is the one judged (_Users).
+        server.set_identity_tokens([ua.UserNameIdentityToken] if self.user else [ua.AnonymousIdentityToken])
         ns = await server.register_namespace(namespace(self.image.tags.run))
         root = await server.nodes.objects.add_folder(ua.NodeId(self.image.tags.run, ns), self.image.tags.run)
         folders = {}
@@ -154,14 +155,22 @@ class _CheckedWrites(AttributeService):
 
 class _Users:
     """Who may open a session: on a secured gateway only a client on a channel with a certificate
-    (asyncua passes the channel's client certificate here), and with a user only that user and
-    password; anyone else is refused (asyncua answers BadUserAccessDenied)."""
+    (asyncua passes the channel's client certificate here) and, with `--trust`, only one of the
+    trusted certificates; with a user only that user and password; anyone else is refused (asyncua
+    answers BadUserAccessDenied).
 
-    def __init__(self, user: tuple[str, str] | None, secured: bool):
-        self.user, self.secured = user, secured
+    The trust is checked here, on the channel's certificate, and not only by asyncua's validator:
+    asyncua 2.1.0 validates the certificate a client names in CreateSession, and only if it names
+    one, never that it is the channel's — a client on a channel of its own certificate that names
+    none (or a trusted client's public certificate) would pass it."""
+
+    def __init__(self, user: tuple[str, str] | None, secured: bool, trusted: tuple[bytes, ...] = ()):
+        self.user, self.secured, self.trusted = user, secured, set(trusted)
 
     def get_user(self, iserver, username=None, password=None, certificate=None):
         if self.secured and not certificate:
+            return None
+        if self.trusted and bytes(certificate) not in self.trusted:
             return None
         if self.user is not None and (username, password) != self.user:
             return None
