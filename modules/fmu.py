@@ -125,6 +125,11 @@ class Fmu(Module):
                          for key in ("solver", "max_step", "tolerance") if key in params]
         elif params.get("solver") == "euler" and "max_step" not in params:
             problems.append((("solver",), "euler takes fixed steps: give their length as max_step"))
+        if params.get("participant") == "join":
+            # A joining serve-fmu integrates with its own command line's settings; the hub cannot set them.
+            problems += [((key,), f"{key} is given to the joining process (`planthub serve-fmu --"
+                                  f"{key.replace('_', '-')} …`): with participant: join the hub cannot set it")
+                         for key in ("interface", "solver", "max_step", "tolerance") if key in params]
         variables = fmu.variables
         ports = {v.name for v in fmu.of("input") + fmu.of("output")}
         problems += [(("parameters", name), message) for name, message in

@@ -37,6 +37,7 @@ from __future__ import annotations
 from hub.core.module import Module
 from hub.core.slots import Slot
 from hub.logic.component import LogicComponent
+from hub.logic.fmi import CO_SIMULATION
 from hub.logic.ssp import SspError, override_problems, read_ssp, start_values
 from hub.logic.ssp_slave import SspSlave
 
@@ -79,7 +80,7 @@ class Ssp(Module):
         if run.event_driven:
             problems += [(("file",), f"{system.path.name}: component {p.name!r} ({p.fmu.path.name}) cannot handle "
                                      f"variable communication steps, which run.event_driven needs")
-                         for p in system.parts if not p.fmu.variable_steps]
+                         for p in system.parts if p.fmu.kind == CO_SIMULATION and not p.fmu.variable_steps]
         return problems
 
     @classmethod

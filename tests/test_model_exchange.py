@@ -59,10 +59,10 @@ def ball_height(t):
     return 0.0
 
 
-def tank_level(t):
+def tank_level(t, closes=T_CLOSE):
     """The tank's level from empty at a constant inflow: a first-order rise, then linear once the outlet closes."""
     rise = lambda s: INFLOW * TAU * (1 - math.exp(-s / TAU))
-    return rise(t) if t < T_CLOSE else rise(T_CLOSE) + INFLOW * (t - T_CLOSE)
+    return rise(t) if t < closes else rise(closes) + INFLOW * (t - closes)
 
 
 def ball_scene(write_scenario, fmu, extra="", name="scene.yaml"):
@@ -114,25 +114,29 @@ def test_a_model_exchange_fmu_gives_the_same_results_in_every_transport(foreign,
     assert (tmp_path / "other" / "recording.csv").read_bytes() == (tmp_path / "hub" / "recording.csv").read_bytes()
 
 
-def test_an_fmi3_tank_model_drives_the_plant(foreign, write_scenario, tmp_path):
+@pytest.mark.parametrize("closes", [T_CLOSE, 3.01])
+def test_an_fmi3_tank_model_drives_the_plant(foreign, write_scenario, tmp_path, closes):
     """A plant-side model: the level within 0.1 mm of the exact one over the input event at 0 s, the
-    state event (full at 2.7726 s) and the time event (the outlet closing at 3 s); `full` starts the belt."""
+    state event (full at 2.7726 s) and the time event (the outlet closing at 3 s, on a point, or at
+    3.01 s, between two); its equations never evaluated past a point; `full` starts the belt."""
     path = write_scenario(f"""
         planthub: 1
         run: {{duration: 4.0, physics_rate: 100, communication_step: 0.02}}
         objects:
-          tank: {{module: fmu, file: {foreign["tank3"]}}}
+          tank: {{module: fmu, file: {foreign["tank3"]}, parameters: {{t_close: {closes}}}}}
           inflow: {{module: constant, type: real, value: {INFLOW}}}
           belt: {{module: conveyor, position: [0, 0, 0], length: 1.0, speed: 0.2, running: false}}
         flows:
           - {{from: inflow.value.out, to: tank.logic.inflow, when: target}}
           - {{from: tank.logic.full, to: belt.drive.run}}
-        record: [tank.logic.level, tank.logic.full, belt.drive.running]
+        record: [tank.logic.level, tank.logic.full, tank.logic.latest, belt.drive.running]
         """)
     run_scenario(path, tmp_path / "out")
     data = rows(tmp_path / "out" / "recording.csv")
     for row in data:
-        assert abs(float(row["tank.logic.level"]) - tank_level(float(row["time"]))) < 1e-4, row["time"]
+        t = float(row["time"])
+        assert abs(float(row["tank.logic.level"]) - tank_level(t, closes)) < 1e-4, t
+        assert float(row["tank.logic.latest"]) <= t + 1e-9, t   # CVODE stopped at the point, not past it
     full_at = -TAU * math.log(1 - THRESHOLD / (INFLOW * TAU))    # 2.7726 s
     first = next(float(r["time"]) for r in data if r["tank.logic.full"] == "1")
     assert first == pytest.approx(math.ceil(full_at / 0.02) * 0.02)
@@ -156,6 +160,7 @@ def test_interface_and_solver_settings_are_checked(foreign, write_scenario):
           b: {{module: fmu, file: {enum2}, solver: cvode, tolerance: 0.001}}
           c: {{module: fmu, file: {ball2}, solver: euler}}
           d: {{module: fmu, file: {ball2}, interface: co-simulation}}
+          e: {{module: fmu, file: {ball2}, participant: join, solver: euler, max_step: 0.001}}
         """)
     assert errors(path) == [
         "objects.a.interface: enum2.fmu offers no model-exchange interface with a binary for this platform "
@@ -167,4 +172,8 @@ def test_interface_and_solver_settings_are_checked(foreign, write_scenario):
         "objects.c.solver: euler takes fixed steps: give their length as max_step",
         "objects.d.interface: ball2.fmu offers no co-simulation interface with a binary for this platform "
         "(it offers: model-exchange)",
+        "objects.e.solver: solver is given to the joining process (`planthub serve-fmu --solver …`): with "
+        "participant: join the hub cannot set it",
+        "objects.e.max_step: max_step is given to the joining process (`planthub serve-fmu --max-step …`): with "
+        "participant: join the hub cannot set it",
     ]

@@ -376,8 +376,16 @@ def test_a_nan_between_two_fmus_stops_the_run_naming_the_output(faulty, tmp_path
     path = scene(tmp_path, write_scenario, ssd, parameter_set({"faulty.nan_at": ("Integer", "4")}), text, fmus=fmus)
     with pytest.raises(SimulationError) as info:
         run_scenario(path, tmp_path / "out")
-    assert str(info.value) == ("SSP instance 'ctl': faulty.level gave nan at t = 0.08 s; a non-finite value is not "
-                               "passed on to another FMU, so the run stops here")
+    assert str(info.value) == ("SSP instance 'ctl': connection faulty.level → drive.speed_setpoint carries nan at "
+                               "t = 0.08 s; a non-finite value is not passed on to an FMU, so the run stops here")
+
+
+def test_a_transformation_that_is_not_finite_is_named_at_load(tmp_path, write_scenario):
+    """factor="NaN" is a legal xs:double; passed on it would feed NaN to the drive at every step."""
+    ssd = TIMER_BELT.replace(CONNECTION, CONNECTION[:-2] + '><ssc:LinearTransformation factor="NaN"/></ssd:Connection>')
+    assert problems(scene(tmp_path, write_scenario, ssd)) == [
+        AT + "connection timer.remaining → drive.speed_setpoint: its LinearTransformation's factor and offset must be "
+             "finite (factor nan, offset 0.0)"]
 
 
 TANK = """\
@@ -430,4 +438,6 @@ def test_a_model_exchange_component_is_integrated_as_an_fmu_object_would_be(tmp_
     recorded = (tmp_path / "ssp" / "recording.csv").read_bytes()
     assert recorded == (tmp_path / "fmu" / "recording.csv").read_bytes()
     assert b",1\n" in recorded   # the tank filled within the run: the state event was integrated to
+    # A model-exchange component takes any step the hub gives it: an event-driven run is not refused.
+    load_scenario(in_ssp, {"run.event_driven": True})
 

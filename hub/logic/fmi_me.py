@@ -91,10 +91,10 @@ class FmuModel(FmuSlave):
             return _Euler(set_time=self._guard(fmu.setTime), max_step=self.integration.max_step, **callbacks)
         from fmpy.sundials import CVodeSolver
 
-        return CVodeSolver(get_nominals=self._guard(fmu.getNominalsOfContinuousStates),
-                           set_time=self._guard(fmu.setTime), input=_HeldInputs(), startTime=self.time,
-                           maxStep=self.integration.max_step or math.inf,
-                           relativeTolerance=self.integration.tolerance, maxNumSteps=100_000, **callbacks)
+        return _Stopping(CVodeSolver(get_nominals=self._guard(fmu.getNominalsOfContinuousStates),
+                                     set_time=self._guard(fmu.setTime), input=_HeldInputs(), startTime=self.time,
+                                     maxStep=self.integration.max_step or math.inf,
+                                     relativeTolerance=self.integration.tolerance, maxNumSteps=100_000, **callbacks))
 
     def _guard(self, function):
         """`function` as a solver callback: a failing FMI call inside the solver is kept and raised
@@ -131,7 +131,7 @@ class FmuModel(FmuSlave):
                 return
             timed, at = self._next_event
             target = min(end, at) if timed and at > now else end
-            state_event, _, reached = self._solver.step(now, target)
+            state_event, reached = self._solver.step(now, target)
             if self._fault is not None:
                 fault, self._fault = self._fault, None
                 raise fault
@@ -160,8 +160,36 @@ class FmuModel(FmuSlave):
             raise fault
 
     def close(self) -> None:
-        self._solver = None   # CVODE's memory is freed with the solver, before the instance goes
+        self._solver = None   # unused from here; CVODE's memory goes with the solver object (its callbacks run no more)
         super().close()
+
+
+class _Stopping:
+    """fmpy's CVODE solver made to stop at the target: it integrates in CV_NORMAL mode, past the
+    target, and interpolates back, so the FMU's equations would be evaluated beyond a time event or
+    a communication point (a table's end, an outlet already closed). A stop time set before each
+    call (SUNDIALS clears it once reached) keeps every evaluation at or before the target."""
+
+    def __init__(self, solver):
+        from ctypes import c_void_p
+
+        from fmpy.sundials.libraries import sundials_cvode
+        from fmpy.sundials.sundials_types import sunrealtype
+
+        self.solver = solver
+        self._stop = sundials_cvode.CVodeSetStopTime
+        self._stop.argtypes = [c_void_p, sunrealtype]
+
+    def step(self, t: float, target: float) -> tuple[bool, float]:
+        """(a state event ended the interval, the time reached)."""
+        status = self._stop(self.solver.cvode_mem, target)
+        if status < 0:
+            raise RuntimeError(f"CVodeSetStopTime({target!r}) returned {status}")
+        _, roots, reached = self.solver.step(t, target)   # a stop at the target is no event: roots say
+        return bool(roots.any()), reached
+
+    def reset(self, time: float) -> None:
+        self.solver.reset(time)
 
 
 class _HeldInputs:
@@ -211,5 +239,5 @@ class _Euler:
                 self.get_z(self._z, self.nz)
                 crossed = (self.before > 0) != (self.z > 0)
                 if crossed.any():
-                    return True, crossed.astype(np.int32), t1
-        return False, np.zeros(self.nz, dtype=np.int32), target
+                    return True, t1
+        return False, target

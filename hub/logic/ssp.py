@@ -21,6 +21,7 @@ transformations, unit conversions — is refused by name, never ignored. A param
 """
 from __future__ import annotations
 
+import math
 import hashlib
 import posixpath
 import re
@@ -326,6 +327,10 @@ class _Reader:
                 continue
             if mapping is not None:
                 self.fail(f"connection {link}: a {mapping}: not supported (only a LinearTransformation between reals)")
+                continue
+            if scale is not None and not all(math.isfinite(x) for x in scale):
+                self.fail(f"connection {link}: its LinearTransformation's factor and offset must be finite "
+                          f"(factor {scale[0]!r}, offset {scale[1]!r})")
                 continue
             start_type = start_type or typed.get(start)
             end_type = end_type or typed.get(end)

@@ -40,17 +40,14 @@ class SspSlave:
 
         def source(link):
             if link.start[0] is None:
-                return None, system_inputs[link.start[1]], link.scale
-            return names.index(link.start[0]), read[link.start[0]].index(link.start[1]), link.scale
+                return None, system_inputs[link.start[1]], link.scale, str(link)
+            return names.index(link.start[0]), read[link.start[0]].index(link.start[1]), link.scale, str(link)
 
-        #: per component, (component or None for the system, position, scale) of each input it is fed
+        #: per component, (component or None for the system, position, scale, the connection) of each
+        #: input it is fed. No LogicComponent sees a value passed inside, so its finiteness is checked
+        #: here, after its transformation, as a flow's would be (hub/logic/component.py).
         self._routes = [[source(feeds[(name, v)]) for v in fed[name]] for name in names]
         self._out = [source(feeds[(None, o)]) for o in outputs]
-        #: (component, position, name) of each output that feeds another component: no LogicComponent
-        #: sees it, so its finiteness is checked here, as a flow's source would be (hub/logic/component.py)
-        self._internal = tuple(dict.fromkeys((names.index(link.start[0]), read[link.start[0]].index(link.start[1]),
-                                              f"{link.start[0]}.{link.start[1]}")
-                                             for link in system.links if None not in (link.start[0], link.end[0])))
         try:
             for part in system.parts:
                 slave = open_fmu(part.fmu, f"{instance}.{part.name}", fed[part.name], read[part.name],
@@ -67,7 +64,7 @@ class SspSlave:
         self._inputs = values
 
     def _value(self, route):
-        part, k, scale = route
+        part, k, scale, _ = route
         value = self._inputs[k] if part is None else self._latest[part][k]
         return value if scale is None else value * scale[0] + scale[1]
 
@@ -76,16 +73,17 @@ class SspSlave:
         # Every input from the outputs of t before any component steps: the order cannot matter.
         for slave, routes in zip(self._parts, self._routes):
             if routes:
-                slave.set_inputs([self._value(r) for r in routes])
+                values = [self._value(r) for r in routes]
+                for value, route in zip(values, routes):
+                    if isinstance(value, float) and value - value != 0.0:   # NaN or ±inf
+                        raise SimulationError(
+                            f"SSP instance {self.instance!r}: connection {route[3]} carries {value!r} at t = {t:.9g} s; "
+                            f"a non-finite value is not passed on to an FMU, so the run stops here")
+                slave.set_inputs(values)
         for slave in self._parts:
             slave.step(t, h)
         self._latest = [slave.outputs() for slave in self._parts]
         self.time = t + h
-        for part, k, name in self._internal:
-            value = self._latest[part][k]
-            if isinstance(value, float) and value - value != 0.0:   # NaN or ±inf
-                raise SimulationError(f"SSP instance {self.instance!r}: {name} gave {value!r} at t = {t + h:.9g} s; "
-                                      f"a non-finite value is not passed on to another FMU, so the run stops here")
 
     def outputs(self) -> list:
         return [self._value(r) for r in self._out]

@@ -1,6 +1,7 @@
 /* A stand-in for another tool's FMI 3.0 model-exchange-only FMU: a tank's level fed by an inflow and
    drained through an outlet (time constant tau) until the outlet closes at t_close (a time event);
-   `full` turns true when the level rises above `threshold` (a state event). Functions it does not
+   `full` turns true when the level rises above `threshold` (a state event); `latest` is the latest
+   time the importer set, so a test sees whether the equations were evaluated past a point. Functions it does not
    implement are generated stubs (tests/foreign_fmus.py). */
 #include <stdlib.h>
 #include <string.h>
@@ -15,6 +16,7 @@ typedef struct {
     fmi3Float64 threshold; /* vr 5, parameter, m */
     fmi3Float64 t_close;   /* vr 6, parameter, s */
     fmi3Boolean full;      /* vr 7, output */
+    fmi3Float64 latest;    /* vr 8, output: the latest time the importer set, so a test sees how far it integrated */
     fmi3Boolean closed;
 } Model;
 
@@ -80,7 +82,12 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetF
 
 fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
 {
-    ((Model *)instance)->time = time;
+    Model *m = instance;
+
+    m->time = time;
+    if (time > m->latest) {
+        m->latest = time;
+    }
     return fmi3OK;
 }
 
@@ -166,6 +173,7 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
         case 4: values[i] = m->tau; break;
         case 5: values[i] = m->threshold; break;
         case 6: values[i] = m->t_close; break;
+        case 8: values[i] = m->latest; break;
         default: return fmi3Error;
         }
     }
