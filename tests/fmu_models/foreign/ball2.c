@@ -8,7 +8,13 @@
 
 #include "fmi2Functions.h"
 
+/* FMI's states of an instance: a call in a state the standard does not allow it in is an error, so
+   a test sees an importer that calls out of order. */
+enum { INSTANTIATED, INITIALIZING, EVENT_MODE, CONTINUOUS, TERMINATED };
+#define IN(m, allowed) if (!(allowed)) { return fmi2Error; }
+
 typedef struct {
+    int mode;
     fmi2Real time;
     fmi2Real h;        /* vr 1, output, state */
     fmi2Real v;        /* vr 3, output, state */
@@ -49,25 +55,58 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     return fmi2OK;
 }
 
-fmi2Status fmi2EnterInitializationMode(fmi2Component c) { return fmi2OK; }
+fmi2Status fmi2EnterInitializationMode(fmi2Component c)
+{
+    Model *m = c;
+
+    IN(m, m->mode == INSTANTIATED);
+    m->mode = INITIALIZING;
+    return fmi2OK;
+}
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
     Model *m = c;
 
+    IN(m, m->mode == INITIALIZING);
+    m->mode = EVENT_MODE;
     m->h = m->h0;
     m->v = 0.0;
     return fmi2OK;
 }
 
-fmi2Status fmi2Terminate(fmi2Component c) { return fmi2OK; }
-fmi2Status fmi2EnterEventMode(fmi2Component c) { return fmi2OK; }
-fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { return fmi2OK; }
+fmi2Status fmi2Terminate(fmi2Component c)
+{
+    Model *m = c;
+
+    IN(m, m->mode == EVENT_MODE || m->mode == CONTINUOUS);
+    m->mode = TERMINATED;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterEventMode(fmi2Component c)
+{
+    Model *m = c;
+
+    IN(m, m->mode == CONTINUOUS);
+    m->mode = EVENT_MODE;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c)
+{
+    Model *m = c;
+
+    IN(m, m->mode == EVENT_MODE);
+    m->mode = CONTINUOUS;
+    return fmi2OK;
+}
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info)
 {
     Model *m = c;
 
+    IN(m, m->mode == EVENT_MODE);
     memset(info, 0, sizeof *info);
     if (!m->lying && m->h <= 0 && m->v < 0) {
         m->bounces++;
@@ -86,6 +125,7 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info)
 fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation)
 {
+    IN((Model *)c, ((Model *)c)->mode == CONTINUOUS);
     *enterEventMode = fmi2False;
     *terminateSimulation = fmi2False;
     return fmi2OK;
@@ -93,6 +133,7 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
 {
+    IN((Model *)c, ((Model *)c)->mode == EVENT_MODE || ((Model *)c)->mode == CONTINUOUS);
     ((Model *)c)->time = time;
     return fmi2OK;
 }
@@ -101,6 +142,7 @@ fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t n
 {
     Model *m = c;
 
+    IN(m, m->mode == CONTINUOUS);
     if (nx != 2) {
         return fmi2Error;
     }
@@ -179,6 +221,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     Model *m = c;
     size_t i;
 
+    IN(m, m->mode == INSTANTIATED || m->mode == INITIALIZING);
     for (i = 0; i < nvr; i++) {
         switch (vr[i]) {
         case 5: m->g = value[i]; break;

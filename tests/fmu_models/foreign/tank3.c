@@ -8,7 +8,13 @@
 
 #include "fmi3Functions.h"
 
+/* FMI's states of an instance: a call in a state the standard does not allow it in is an error, so
+   a test sees an importer that calls out of order. */
+enum { INSTANTIATED, INITIALIZING, EVENT_MODE, CONTINUOUS, TERMINATED };
+#define IN(m, allowed) if (!(allowed)) { return fmi3Error; }
+
 typedef struct {
+    int mode;
     fmi3Float64 time;
     fmi3Float64 inflow;    /* vr 1, input, m/s of level */
     fmi3Float64 level;     /* vr 2, output, state, m */
@@ -45,14 +51,33 @@ void fmi3FreeInstance(fmi3Instance instance) { free(instance); }
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
                                        fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime)
 {
-    ((Model *)instance)->time = startTime;
+    Model *m = instance;
+
+    IN(m, m->mode == INSTANTIATED);
+    m->mode = INITIALIZING;
+    m->time = startTime;
     return fmi3OK;
 }
 
-fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) { return fmi3OK; }
-fmi3Status fmi3Terminate(fmi3Instance instance) { return fmi3OK; }
-fmi3Status fmi3EnterEventMode(fmi3Instance instance) { return fmi3OK; }
-fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) { return fmi3OK; }
+static fmi3Status move(Model *m, int from, int from_too, int to)
+{
+    IN(m, m->mode == from || m->mode == from_too);
+    m->mode = to;
+    return fmi3OK;
+}
+
+fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
+{
+    return move(instance, INITIALIZING, INITIALIZING, EVENT_MODE);
+}
+
+fmi3Status fmi3Terminate(fmi3Instance instance) { return move(instance, EVENT_MODE, CONTINUOUS, TERMINATED); }
+fmi3Status fmi3EnterEventMode(fmi3Instance instance) { return move(instance, CONTINUOUS, CONTINUOUS, EVENT_MODE); }
+
+fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance)
+{
+    return move(instance, EVENT_MODE, EVENT_MODE, CONTINUOUS);
+}
 
 fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discreteStatesNeedUpdate,
                                     fmi3Boolean *terminateSimulation, fmi3Boolean *nominalsOfContinuousStatesChanged,
@@ -61,6 +86,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 {
     Model *m = instance;
 
+    IN(m, m->mode == EVENT_MODE);
     m->full = m->level > m->threshold;
     m->closed = m->time >= m->t_close;
     *discreteStatesNeedUpdate = fmi3False;
@@ -75,6 +101,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation)
 {
+    IN((Model *)instance, ((Model *)instance)->mode == CONTINUOUS);
     *enterEventMode = fmi3False;
     *terminateSimulation = fmi3False;
     return fmi3OK;
@@ -84,6 +111,7 @@ fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time)
 {
     Model *m = instance;
 
+    IN(m, m->mode == CONTINUOUS);
     m->time = time;
     if (time > m->latest) {
         m->latest = time;
@@ -105,6 +133,7 @@ fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n)
 
 fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 x[], size_t nx)
 {
+    IN((Model *)instance, ((Model *)instance)->mode == CONTINUOUS);
     if (nx != 1) {
         return fmi3Error;
     }
@@ -190,11 +219,13 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
         return fmi3Error;
     }
     for (i = 0; i < nvr; i++) {
+        int tuning = m->mode == INSTANTIATED || m->mode == INITIALIZING;
+
         switch (vr[i]) {
-        case 1: m->inflow = values[i]; break;
-        case 4: m->tau = values[i]; break;
-        case 5: m->threshold = values[i]; break;
-        case 6: m->t_close = values[i]; break;
+        case 1: IN(m, m->mode != TERMINATED); m->inflow = values[i]; break;
+        case 4: IN(m, tuning); m->tau = values[i]; break;
+        case 5: IN(m, tuning); m->threshold = values[i]; break;
+        case 6: IN(m, tuning); m->t_close = values[i]; break;
         default: return fmi3Error;
         }
     }

@@ -8,7 +8,13 @@
 
 #include "fmi3Functions.h"
 
+/* FMI's states of an instance: a call in a state the standard does not allow it in is an error, so
+   a test sees an importer that calls out of order. */
+enum { INSTANTIATED, INITIALIZING, EVENT_MODE, STEP_MODE, TERMINATED };
+#define IN(m, allowed) if (!(allowed)) { return fmi3Error; }
+
 typedef struct {
+    int mode;
     fmi3Float64 time;
     fmi3Float64 period;   /* vr 1, parameter */
     fmi3Int32 ticks;      /* vr 2, output: ticks counted in event mode */
@@ -48,14 +54,36 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 {
     Model *m = instance;
 
+    IN(m, m->mode == INSTANTIATED);
+    m->mode = INITIALIZING;
     m->time = m->last = startTime;
     return fmi3OK;
 }
 
-fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) { return fmi3OK; }
-fmi3Status fmi3EnterEventMode(fmi3Instance instance) { return fmi3OK; }
-fmi3Status fmi3EnterStepMode(fmi3Instance instance) { return fmi3OK; }
-fmi3Status fmi3Terminate(fmi3Instance instance) { return fmi3OK; }
+static fmi3Status move(Model *m, int from, int from_too, int to)
+{
+    IN(m, m->mode == from || m->mode == from_too);
+    m->mode = to;
+    return fmi3OK;
+}
+
+fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
+{
+    Model *m = instance;
+
+    return move(m, INITIALIZING, INITIALIZING, m->eventMode ? EVENT_MODE : STEP_MODE);
+}
+
+fmi3Status fmi3EnterEventMode(fmi3Instance instance)
+{
+    Model *m = instance;
+
+    IN(m, m->eventMode);
+    return move(m, STEP_MODE, STEP_MODE, EVENT_MODE);
+}
+
+fmi3Status fmi3EnterStepMode(fmi3Instance instance) { return move(instance, EVENT_MODE, EVENT_MODE, STEP_MODE); }
+fmi3Status fmi3Terminate(fmi3Instance instance) { return move(instance, STEP_MODE, EVENT_MODE, TERMINATED); }
 
 /* The next tick after `time` (a tick at `time` itself is due now). */
 static fmi3Float64 next_tick(const Model *m)
@@ -70,6 +98,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 {
     Model *m = instance;
 
+    IN(m, m->mode == EVENT_MODE);
     if (m->time >= next_tick(m) - 1e-12) {
         m->ticks++;
         m->last = m->time;
@@ -92,6 +121,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     fmi3Float64 end = currentCommunicationPoint + communicationStepSize;
     fmi3Float64 tick = next_tick(m);
 
+    IN(m, m->mode == STEP_MODE);
     *terminateSimulation = fmi3False;
     *earlyReturn = fmi3False;
     *eventHandlingNeeded = fmi3False;
@@ -130,6 +160,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
 {
     size_t i;
 
+    IN((Model *)instance, ((Model *)instance)->mode == INSTANTIATED || ((Model *)instance)->mode == INITIALIZING);
     for (i = 0; i < nvr; i++) {
         if (vr[i] != 1) {
             return fmi3Error;
