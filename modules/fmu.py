@@ -43,11 +43,11 @@ from hub.bus.lockstep import RemoteSpec
 from hub.bus.tls import LAUNCHED_SCHEMA, launched_problems
 from hub.logic.component import LogicComponent
 from hub.logic.factory import SlavePlan, make_slave
-from hub.logic.fmi import CO_SIMULATION, MODEL_EXCHANGE, FmuError, inspect_fmu
-from hub.logic.fmi_me import SOLVERS, Integration
+from hub.core.logic_spec import CO_SIMULATION, INTERFACES, MODEL_EXCHANGE, SOLVERS, own_step_problems
+from hub.logic.fmi import FmuError, inspect_fmu
+from hub.logic.fmi_me import Integration
 from hub.logic.fmi_variables import parameter_problems, parameter_values
 from hub.logic.ports import fmu_ports
-from hub.core.logic_spec import own_step_problems
 from hub.core.module import Module
 from hub.core.registry import did_you_mean
 from hub.core.slots import SlotType
@@ -85,7 +85,7 @@ class Fmu(Module):
                              "description": "a non-finite real from the logic: stop the run, or hold the last good value (logged)"},
             "join_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
                              "description": "s to wait for the participant to join (and to rejoin in a paused run)"},
-            "interface": {"enum": [CO_SIMULATION, MODEL_EXCHANGE],
+            "interface": {"enum": list(INTERFACES),
                           "description": "the FMU's interface to run (default: co-simulation where it offers it)"},
             "solver": {"enum": list(SOLVERS),
                        "description": "model exchange: cvode (variable step, default) or euler (fixed steps of max_step)"},
@@ -198,8 +198,9 @@ class Fmu(Module):
     @classmethod
     def integration(cls, params) -> Integration:
         """The interface the object runs and, for model exchange, its solver."""
-        return Integration(params.get("interface", inspect_fmu(params["file"]).kind), params.get("solver", "cvode"),
-                           params.get("max_step"), params.get("tolerance", 1e-6))
+        return Integration(params.get("interface", inspect_fmu(params["file"]).kind),
+                           params.get("solver", Integration.solver), params.get("max_step"),
+                           params.get("tolerance", Integration.tolerance))
 
     @classmethod
     def build(cls, name, params, world):

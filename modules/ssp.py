@@ -37,7 +37,7 @@ from __future__ import annotations
 from hub.core.module import Module
 from hub.core.slots import Slot
 from hub.logic.component import LogicComponent
-from hub.logic.fmi import CO_SIMULATION
+from hub.core.logic_spec import CO_SIMULATION
 from hub.logic.ssp import SspError, override_problems, read_ssp, start_values
 from hub.logic.ssp_slave import SspSlave
 

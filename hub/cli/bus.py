@@ -16,6 +16,7 @@ def add_commands(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str 
     """The bus subcommands (each with `parents`' options and `epilog` after its example); returns
     name → handler."""
     from hub.bus.participant import add_options, add_tls_options
+    from hub.core.logic_spec import INTERFACES, SOLVERS
 
     serve = sub.add_parser(
         "serve-fmu", parents=parents, formatter_class=formatter,
@@ -29,12 +30,12 @@ def add_commands(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str 
                        help="a Boolean variable that is a void slot (the object's `events`)")
     serve.add_argument("--map", action="append", default=[], metavar="VARIABLE=SLOT",
                        help="a variable's slot name (the object's `map`)")
-    serve.add_argument("--interface", choices=["co-simulation", "model-exchange"],
+    serve.add_argument("--interface", choices=INTERFACES,
                        help="the interface to run (the object's `interface`; default: co-simulation where offered)")
-    serve.add_argument("--solver", choices=["cvode", "euler"], default="cvode",
-                       help="model exchange: the solver (the object's `solver`)")
+    serve.add_argument("--solver", choices=SOLVERS, help="model exchange: the solver (the object's `solver`; "
+                                                         "default cvode)")
     serve.add_argument("--max-step", type=float, metavar="S", help="model exchange: the solver's longest step, s")
-    serve.add_argument("--tolerance", type=float, default=1e-6, help="model exchange: cvode's relative tolerance")
+    serve.add_argument("--tolerance", type=float, help="model exchange: cvode's relative tolerance (default 1e-6)")
     add_options(serve)
     serve.set_defaults(command_parser=serve)
 
@@ -91,7 +92,8 @@ def _serve_fmu(parser, args) -> int:
         rename[variable] = slot
     if args.solver == "euler" and args.max_step is None:
         parser.error("--solver euler needs --max-step")
-    integration = Integration(args.interface, args.solver, args.max_step, args.tolerance)
+    given = {"solver": args.solver, "max_step": args.max_step, "tolerance": args.tolerance}
+    integration = Integration(args.interface, **{k: v for k, v in given.items() if v is not None})
     logic = FmuParticipant(str(args.fmu), args.event, rename, instance=args.name,
                            integration=integration)   # an FmuError: exit 1
     return serve(logic, args=args)

@@ -28,6 +28,12 @@ class LogicSpec:
         return BUILT_FMUS / f"{self.model}-fmi2.fmu"
 
 
+#: The interfaces of an FMU planthub runs, in the order it prefers them, and the solvers it
+#: integrates a model-exchange FMU with (hub/logic/fmi_me.py): named here, where the scenario's
+#: options and the command line find them without loading fmpy.
+CO_SIMULATION, MODEL_EXCHANGE = INTERFACES = ("co-simulation", "model-exchange")
+SOLVERS = ("cvode", "euler")
+
 # `logic:` in a scenario object is `default` (the module's own FMU) or these options, which
 # may name a replacement `file` and take the `fmu` module's other options.
 OPTIONS = {
@@ -40,8 +46,8 @@ OPTIONS = {
         "step": {"type": "number", "exclusiveMinimum": 0},
         "on_bad_value": {"enum": ["stop", "hold"]},
         "step_timeout": {"type": "number", "exclusiveMinimum": 0},
-        "interface": {"enum": ["co-simulation", "model-exchange"]},
-        "solver": {"enum": ["cvode", "euler"]},
+        "interface": {"enum": list(INTERFACES)},
+        "solver": {"enum": list(SOLVERS)},
         "max_step": {"type": "number", "exclusiveMinimum": 0},
         "tolerance": {"type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 1},
     },

@@ -20,6 +20,7 @@ from fmpy.fmi3 import FMU3Slave
 
 from hub.core import scratch
 from hub.core.errors import PlanthubError, SimulationError
+from hub.core.logic_spec import CO_SIMULATION, MODEL_EXCHANGE
 from hub.core.slots import INT_RANGE, SlotType
 from hub.logic.fmi_variables import FmuVariable, map_variables
 
@@ -33,10 +34,6 @@ class FmuError(PlanthubError):
     """An FMU file cannot be used: the message names the file and the cause."""
 
 
-#: The interfaces planthub runs, in the order it prefers them when an FMU offers both.
-CO_SIMULATION, MODEL_EXCHANGE = "co-simulation", "model-exchange"
-
-
 @dataclass(frozen=True)
 class FmuInterface:
     """What a scenario check needs of an FMU: its version, identity, its variables as slots
@@ -46,7 +43,6 @@ class FmuInterface:
     path: Path
     fmi_version: str
     model_name: str
-    identifier: str            # the preferred interface's modelIdentifier
     guid: str
     variables: dict[str, FmuVariable]
     variable_steps: bool       # canHandleVariableCommunicationStepSize (co-simulation)
@@ -135,7 +131,7 @@ def _read_interface(path: Path) -> FmuInterface:
             attributes[element.get("name")] = dict(typed.attrib)
     variables, unmapped = map_variables(md.modelVariables, attributes, version == "2.0")
     cs, me = md.coSimulation, md.modelExchange
-    return FmuInterface(path, version, md.modelName, identifiers[0][1], md.guid, variables,
+    return FmuInterface(path, version, md.modelName, md.guid, variables,
                         bool(cs and cs.canHandleVariableCommunicationStepSize), tuple(unmapped), identifiers,
                         states=md.numberOfContinuousStates if me else 0,
                         event_indicators=md.numberOfEventIndicators if me else 0,
@@ -180,6 +176,7 @@ class FmuSlave:
 
     on_bus = False
     KIND = CO_SIMULATION
+    STEP = "doStep"   # what a failing step is called in messages
     _CLASSES = {"2.0": FMU2Slave, "3.0": FMU3Slave}
     #: early returns one communication step may take: past it the FMU is taken to be stuck at an event
     MAX_EVENTS = 10_000
@@ -307,7 +304,7 @@ class FmuSlave:
         self.time = t
         self.busy_since = time.monotonic()
         try:
-            self._call("doStep", self._do_step, t, h)
+            self._call(self.STEP, self._do_step, t, h)
         finally:
             self.busy_since = None
         self.time = t + h

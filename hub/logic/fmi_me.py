@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -10,10 +9,8 @@ from fmpy.fmi2 import FMU2Model
 from fmpy.fmi3 import FMU3Model
 
 from hub.core.errors import SimulationError
-from hub.logic.fmi import CO_SIMULATION, MODEL_EXCHANGE, FmuInterface, FmuSlave
-
-#: The solvers a model-exchange FMU can be integrated with (the `fmu` module's `solver`).
-SOLVERS = ("cvode", "euler")
+from hub.core.logic_spec import CO_SIMULATION, MODEL_EXCHANGE
+from hub.logic.fmi import FmuInterface, FmuSlave
 
 
 @dataclass(frozen=True)
@@ -61,6 +58,7 @@ class FmuModel(FmuSlave):
     """
 
     KIND = MODEL_EXCHANGE
+    STEP = "integrate"
     _CLASSES = {"2.0": FMU2Model, "3.0": FMU3Model}
 
     def __init__(self, interface: FmuInterface, instance: str, inputs: list[str], outputs: list[str],
@@ -80,6 +78,7 @@ class FmuModel(FmuSlave):
         self._next_event = self.update_discrete_states()
         self._call("enterContinuousTimeMode", self._fmu.enterContinuousTimeMode)
         self._solver = self._call("start the solver", self._make_solver)
+        self._do_step = self._integrate
 
     def _make_solver(self):
         fmu, nx, nz = self._fmu, self.interface.states, self.interface.event_indicators
@@ -116,25 +115,15 @@ class FmuModel(FmuSlave):
         self._inputs = values
         self._event()
 
-    def step(self, t: float, h: float) -> None:
-        self.time = t
-        self.busy_since = time.monotonic()
-        try:
-            self._call("integrate", self._integrate, t, t + h)
-        finally:
-            self.busy_since = None
-        self.time = t + h
-
-    def _integrate(self, now: float, end: float) -> None:
+    def _integrate(self, now: float, h: float) -> None:
+        end = now + h
         for _ in range(self.MAX_EVENTS):
             if now >= end:
                 return
             timed, at = self._next_event
             target = min(end, at) if timed and at > now else end
             state_event, reached = self._solver.step(now, target)
-            if self._fault is not None:
-                fault, self._fault = self._fault, None
-                raise fault
+            self._raise_fault()
             self._fmu.setTime(reached)
             step_event = False
             if self.interface.completed_step:
@@ -155,6 +144,10 @@ class FmuModel(FmuSlave):
         self._next_event = self.update_discrete_states()
         self._call("enterContinuousTimeMode", self._fmu.enterContinuousTimeMode)
         self._call("restart the solver", self._solver.reset, self.time)
+        self._raise_fault()
+
+    def _raise_fault(self) -> None:
+        """The FMI call that failed inside the solver, raised now that the solver has returned."""
         if self._fault is not None:
             fault, self._fault = self._fault, None
             raise fault
