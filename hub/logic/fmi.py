@@ -2,7 +2,9 @@
 from __future__ import annotations
 
 import ctypes
+import functools
 import itertools
+import operator
 import shutil
 import tempfile
 import time
@@ -406,10 +408,24 @@ class _Batches:
             self.groups.append((members, positions, kind, check_writes, check_reads, binary, vrs, values, start,
                                 get, _raw(fmu, get), set_, _raw(fmu, set_)))
         self._v2 = v2
+        # Read, a group's values leave its C array in one slice and reach the variables' order
+        # through one itemgetter: a Python call per value cost more than the FMI calls themselves.
+        self._reads = tuple((_pick(positions, n), _convert(kind, type(buf)._type_), members if check_reads else None,
+                             binary, vrs, buf, n, get, getter)
+                            for members, positions, kind, _, check_reads, binary, vrs, buf, n, get, getter, _, _
+                            in self.groups)
+        # Written, a group that fills its C array in order takes its values in one slice.
+        self._whole = tuple(_pick(members, self.count) if positions == list(range(n)) and kind is not SlotType.STRING
+                            and binary is None else None
+                            for members, positions, kind, _, _, binary, _, _, n, *_ in self.groups)
+        gathered = [i for members, *_ in self.groups for i in members]   # the variable of each value read
+        where = {i: k for k, i in enumerate(gathered)}
+        self._order = _pick([where[i] for i in range(self.count)], len(gathered))
 
     def set(self, values: list) -> None:
         component = self.fmu.component
-        for members, positions, kind, check_writes, _, binary, vrs, buf, n, _, _, name, setter in self.groups:
+        for (members, positions, kind, check_writes, _, binary, vrs, buf, n, _, _, name, setter), whole \
+                in zip(self.groups, self._whole):
             if check_writes:
                 for i in members:
                     try:
@@ -424,35 +440,56 @@ class _Batches:
                     binary[k] = len(data)
                 _check(name, setter(component, vrs, len(vrs), binary, buf, n))
                 continue
-            for k, i in zip(positions, members):
-                buf[k] = _to_c(kind, values[i])
+            if whole is not None:
+                buf[:] = whole(values)
+            else:
+                for k, i in zip(positions, members):
+                    buf[k] = _to_c(kind, values[i])
             if self._v2:
                 _check(name, setter(component, vrs, len(vrs), buf))
             else:   # FMI 3 getters and setters also take the number of values (arrays may differ)
                 _check(name, setter(component, vrs, len(vrs), buf, n))
 
     def get(self) -> list:
-        out = [None] * self.count
+        gathered = []
         component = self.fmu.component
-        for members, positions, kind, _, check_reads, binary, vrs, buf, n, name, getter, _, _ in self.groups:
+        for pick, convert, unsigned, binary, vrs, buf, n, name, getter in self._reads:
             if binary is not None:
                 _check(name, getter(component, vrs, len(vrs), binary, buf, n))
-                for k, i in zip(positions, members):
-                    out[i] = ctypes.string_at(buf[k], binary[k]).hex() if buf[k] else ""
+                gathered += [ctypes.string_at(buf[k], binary[k]).hex() if buf[k] else "" for k in pick(range(n))]
                 continue
             if self._v2:
                 _check(name, getter(component, vrs, len(vrs), buf))
             else:
                 _check(name, getter(component, vrs, len(vrs), buf, n))
-            for k, i in zip(positions, members):
-                out[i] = _from_c(kind, buf[k])
-            if check_reads:
-                for i in members:
-                    if out[i] > INT_RANGE[1]:
-                        v = self.variables[i]
-                        raise ValueError(f"{v.causality} {v.name!r} ({v.fmi_type}) is {out[i]}, above "
-                                         f"{INT_RANGE[1]}, the largest value an int slot carries")
-        return out
+            values = pick(buf[:])
+            if convert is not None:
+                values = list(map(convert, values))
+            if unsigned is not None:
+                self._check_range(unsigned, values)
+            gathered += values
+        return self._order(gathered)
+
+    def _check_range(self, members: list[int], values: list) -> None:
+        """A UInt64 holds more than an int slot's 64 signed bits: past them the run stops."""
+        for i, value in zip(members, values):
+            if value > INT_RANGE[1]:
+                v = self.variables[i]
+                raise ValueError(f"{v.causality} {v.name!r} ({v.fmi_type}) is {value}, above "
+                                 f"{INT_RANGE[1]}, the largest value an int slot carries")
+
+
+def _pick(positions: list[int], size: int):
+    """A function taking the values at `positions` of a list of `size`, as a list."""
+    if positions == list(range(size)):
+        return list
+    if len(positions) == 1:
+        k = positions[0]
+        return lambda values: [values[k]]
+    if not positions:
+        return lambda values: []
+    take = operator.itemgetter(*positions)
+    return lambda values: list(take(values))
 
 
 def _raw(fmu, name: str):
@@ -488,6 +525,23 @@ def _to_c(kind: SlotType, value):
     if kind is SlotType.STRING:
         return value.encode("utf-8")
     return value
+
+
+# C types whose array elements are already what _from_c makes of them (float, int, bool).
+_NATIVE = {
+    SlotType.REAL: (ctypes.c_double, ctypes.c_float),
+    SlotType.BOOL: (ctypes.c_bool,),
+    SlotType.INT: (ctypes.c_int8, ctypes.c_uint8, ctypes.c_int16, ctypes.c_uint16, ctypes.c_int32, ctypes.c_uint32,
+                   ctypes.c_int64, ctypes.c_uint64),
+}
+
+
+def _convert(kind: SlotType, ctype):
+    """What turns a value of a C array of `ctype` into the slot's value: None when nothing has to."""
+    if ctype in _NATIVE.get(kind, ()):
+        return None
+    # bool, float, int: what _from_c calls, without a Python call per value
+    return {SlotType.BOOL: bool, SlotType.REAL: float, SlotType.INT: int}.get(kind) or functools.partial(_from_c, kind)
 
 
 def _from_c(kind: SlotType, value):
