@@ -57,8 +57,8 @@ class Inspection(VolumeTrigger):
             self.emit("checked", self.results[-1][2])
 
     def events(self, tick):
-        yield from super().events(tick)
-        yield from self.results
+        rows = super().events(tick)
+        return [*rows, *self.results] if self.results else rows
 
 
 class Inspector(Module):

@@ -100,8 +100,7 @@ class Push(Component):
 
     def events(self, tick):
         """The plate's arrivals with the tick it got there, a refusal with the tick it came at."""
-        for at, event in self.reported:
-            yield at, event, ""
+        return [(at, event, "") for at, event in self.reported]
 
 
 class Pusher(Module):

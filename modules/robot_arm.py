@@ -89,9 +89,10 @@ class Gripper(VolumeTrigger):
             self.emit("position", tuple(self.arm.tool_position.tolist()))
 
     def events(self, tick):
-        yield from super().events(tick)
-        for event, body in self.reported:
-            yield tick, event, self.world.labels[body]
+        rows = super().events(tick)
+        if not self.reported:
+            return rows
+        return [*rows, *((tick, event, self.world.labels[body]) for event, body in self.reported)]
 
     def actuate(self):
         if self.updated("hold"):

@@ -99,11 +99,11 @@ class Bin(Component):
         self.taken = []
 
     def events(self, tick):
-        for d in self.taken:
-            yield tick, "taken", d.bottle
-        for d in self.taken:
-            if d.misrouted:
-                yield tick, "misrouted", f"{d.bottle} (for {d.destination or 'no destination'})"
+        if not self.taken:
+            return ()
+        return ([(tick, "taken", d.bottle) for d in self.taken]
+                + [(tick, "misrouted", f"{d.bottle} (for {d.destination or 'no destination'})")
+                   for d in self.taken if d.misrouted])
 
 
 class Count(Component):

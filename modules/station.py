@@ -100,9 +100,9 @@ class Process(Component):
         return bool(rng.random() < self.faults)
 
     def events(self, tick):
-        for slot in ("started", "done", "faulty", "aborted"):
-            if self.signals.active[self.index[slot]]:
-                yield tick, slot, self.value("object")
+        active, index = self.signals.active, self.index
+        return [(tick, slot, self.value("object")) for slot in ("started", "done", "faulty", "aborted")
+                if active[index[slot]]]
 
 
 class Station(Module):

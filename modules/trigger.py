@@ -68,8 +68,9 @@ class VolumeTrigger(Component):
         self.emit("occupied", bool(latch.inside))
 
     def events(self, tick):
+        latch = self.latch
+        if not (latch.entered or latch.left):
+            return ()
         labels = self.world.labels
-        for t, n in self.latch.entered:
-            yield t, "on_enter", labels[n]
-        for t, n in self.latch.left:
-            yield t, "on_leave", labels[n]
+        return ([(t, "on_enter", labels[n]) for t, n in latch.entered]
+                + [(t, "on_leave", labels[n]) for t, n in latch.left])

@@ -1,7 +1,7 @@
 """The component contract: a small piece of functionality that owns typed slots."""
 from __future__ import annotations
 
-from typing import ClassVar, Iterator
+from typing import ClassVar, Sequence
 
 from hub.core.signals import Signals
 from hub.core.slots import Direction, Slot, SlotType
@@ -67,13 +67,15 @@ class Component:
         or None when the slot's value says it all. An operator's `release` gives it back."""
         return None
 
-    def events(self, tick: int) -> Iterator[tuple[int, str, str]]:
-        """Event-log rows `(tick, slot, detail)` for this step: by default every active void source."""
-        signals = self.signals
-        for slot in self.SLOTS:
-            if slot.type is SlotType.VOID and slot.direction is Direction.SOURCE:
-                if signals.active[self.index[slot.name]]:
-                    yield tick, slot.name, ""
+    def events(self, tick: int) -> Sequence[tuple[int, str, str]]:
+        """Event-log rows `(tick, slot, detail)` for this step: by default every active void source.
+
+        A sequence, empty at most points: the master passes over an empty one at once (a
+        generator it would have to run), and it asks a component that keeps this default rule
+        nothing at all, checking its void sources itself (hub/run/events.py)."""
+        active, index = self.signals.active, self.index
+        return [(tick, slot.name, "") for slot in self.SLOTS
+                if slot.type is SlotType.VOID and slot.direction is Direction.SOURCE and active[index[slot.name]]]
 
     # Helpers for subclasses: read a target / write a source by slot name.
     def updated(self, slot: str) -> bool:

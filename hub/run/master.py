@@ -6,7 +6,8 @@ from dataclasses import dataclass
 
 from hub.core.component import Component
 from hub.core.observer import Observer, Stop, StopCondition
-from hub.core.slots import Direction, SlotType
+from hub.core.slots import Direction
+from hub.run.events import EventRows
 from hub.run.plant import Plant
 
 
@@ -86,7 +87,7 @@ class Master:
         self._sensing = [c for c in comps if type(c).sense is not Component.sense
                          and not (c.QUIET_UNLESS_NEEDED and not c.needed)]
         self._actuating = [c for c in comps if type(c).actuate is not Component.actuate]
-        self._emitters = [c for c in comps if _may_emit(c)]
+        self._events = EventRows(comps)
         self.communicated = False
         self._answering = False   # the last step ended early on an event
 
@@ -108,10 +109,7 @@ class Master:
             evaluate()
         for manipulator in self.manipulators:
             manipulator.apply(signals, Direction.TARGET)
-        for comp in self._emitters:
-            prefix = f"{comp.obj}.{comp.name}."
-            events.extend((t, prefix + slot, detail) for t, slot, detail in comp.events(tick))
-        events.sort(key=lambda e: e[0])   # stable: same-tick events keep component order
+        events = self._events.gather(tick, signals, events)
         for comp in self._actuating:
             comp.actuate()
         for observer in self.observers:
@@ -201,9 +199,3 @@ class Master:
 
     def __exit__(self, *exc):
         self.close()
-
-
-def _may_emit(comp: Component) -> bool:
-    overrides = type(comp).events is not Component.events
-    has_void = any(s.type is SlotType.VOID and s.direction is Direction.SOURCE for s in comp.SLOTS)
-    return overrides or has_void
