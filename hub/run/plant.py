@@ -65,7 +65,7 @@ class Plant:
             self.logic = [c for c in self.components if type(c).step is not Component.step]
             between = self._between_logic(by_key) if scenario.run.master == "gauss-seidel" else {}
             self.plan = [
-                (lambda flow=self.flows[ref]: flow.run(self.signals)) if kind == "flow" else by_key[ref].react
+                self.flows[ref].runner(self.signals) if kind == "flow" else by_key[ref].react
                 for kind, ref in scenario.order if not (kind == "flow" and ref in between)
             ]
             #: Co-simulation algorithm over the logic components (run.master): steps them over an interval.
