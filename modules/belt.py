@@ -57,18 +57,27 @@ class BeltDrive(Component):
         self.speed = speed
         self.running = running
 
+    def bind(self, signals, index, needed):
+        super().bind(signals, index, needed)
+        # Slot numbers settled once: sense and actuate run at every point for every belt (19 in the bottling plant).
+        self._running, self._velocity = index["running"], index["velocity"]
+        self._speed, self._run = index["speed"], index["run"]
+
     def sense(self, tick):
-        self.emit("running", self.running)
-        self.emit("velocity", self.speed if self.running else 0.0)
+        values, active = self.signals.values, self.signals.active
+        values[self._running] = self.running
+        values[self._velocity] = self.speed if self.running else 0.0
+        active[self._running] = active[self._velocity] = True
 
     def held(self, slot):
         return {"run": self.running, "speed": self.speed}.get(slot)
 
     def actuate(self):
-        if self.updated("speed"):
-            self.speed = self.value("speed")
-        if self.updated("run"):
-            self.running = self.value("run")
+        updated, values = self.signals.updated, self.signals.values
+        if updated[self._speed]:
+            self.speed = values[self._speed]
+        if updated[self._run]:
+            self.running = values[self._run]
         self.world.set_field_speed(self.field, self.speed if self.running else 0.0)
 
 

@@ -157,23 +157,36 @@ class TwoPositions(Component):
         super().__init__(obj, name)
         self.blocker = blocker
 
+    def bind(self, signals, index, needed):
+        super().bind(signals, index, needed)
+        # Slot numbers by role, settled once: sense and actuate run at every point for every part.
+        self._at = {role: index[name] for role, name in self.NAMES.items()}
+        at = self._at
+        self._states = (at["is_solid"], at["is_passable"], at["blocked"])
+        self._commands = (at["level"], at["to_passable"], at["to_solid"])
+
     def sense(self, tick):
-        b, n = self.blocker, self.NAMES
+        b = self.blocker
+        values, active = self.signals.values, self.signals.active
         if b.reached is not None:
-            self.emit(n["reached_solid"] if b.reached else n["reached_passable"])
+            active[self._at["reached_solid"] if b.reached else self._at["reached_passable"]] = True
             b.reached = None
         settled = b.arrive is None
-        self.emit(n["is_solid"], settled and b.solid)
-        self.emit(n["is_passable"], settled and not b.target)
-        self.emit(n["blocked"], b.waiting)
+        solid, passable, blocked = self._states
+        values[solid] = settled and b.solid
+        values[passable] = settled and not b.target
+        values[blocked] = b.waiting
+        active[solid] = active[passable] = active[blocked] = True
 
     def actuate(self):
-        b, n, tick = self.blocker, self.NAMES, self.blocker.world.tick
-        if self.updated(n["level"]):
-            b.command(tick, self.value(n["level"]))
-        if self.updated(n["to_passable"]):
+        b, tick = self.blocker, self.blocker.world.tick
+        updated = self.signals.updated
+        level, to_passable, to_solid = self._commands
+        if updated[level]:
+            b.command(tick, self.signals.values[level])
+        if updated[to_passable]:
             b.command(tick, False)
-        if self.updated(n["to_solid"]):
+        if updated[to_solid]:
             b.command(tick, True)
         b.actuate(tick)
 

@@ -120,9 +120,16 @@ class Count(Component):
         self.counts[key] += 1
         self.counts["misrouted"] += misrouted
 
+    def bind(self, signals, index, needed):
+        super().bind(signals, index, needed)
+        self._slots = [index[name] for name in self.counts]   # the counts' slot numbers, in their order
+
     def sense(self, tick):
-        for name, value in self.counts.items():
-            self.emit(name, value)
+        # Every count at every point (7 sinks of 9 counts in the bottling plant): one loop, not 63 emits.
+        values, active = self.signals.values, self.signals.active
+        for i, value in zip(self._slots, self.counts.values()):
+            values[i] = value
+            active[i] = True
 
 
 class Sink(Module):

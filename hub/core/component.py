@@ -85,4 +85,8 @@ class Component:
         return self.signals.values[self.index[slot]]
 
     def emit(self, slot: str, value=None) -> None:
-        self.signals.emit(self.index[slot], value)
+        # Signals.emit inlined: ~150 emits a point in the bottling plant, and the call was half their cost.
+        signals, i = self.signals, self.index[slot]
+        if value is not None:
+            signals.values[i] = value
+        signals.active[i] = True
