@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import logging
+import operator
 
 from hub.core.component import Component
 from hub.core.errors import SimulationError
@@ -38,7 +39,7 @@ class LogicComponent(Component):
         self.latest = None        # outputs in use; fetched at the first point
         self.ready_at = None      # the tick at which the last step's outputs are due
         self._reads = ()          # (slot number, is event) per input, in the FMU's order
-        self._writes = ()         # (slot number, is event) per output
+        self._states = self._events = ((), _getter([]))   # output slot numbers, a getter of their values
         self.on_bad_value = on_bad_value
         kinds = {s.name: s.type for s in slots}
         numeric = (SlotType.REAL, SlotType.VEC3, SlotType.QUAT)
@@ -52,7 +53,12 @@ class LogicComponent(Component):
         super().bind(signals, index, needed)
         # Slot numbers resolved once: sense and step run at every point for every logic object.
         self._reads = tuple((index[slot], event) for slot, event in self.inputs)
-        self._writes = tuple((index[slot], event) for slot, event in self.outputs)
+        # Outputs split once into states (written at every point) and events (active when true),
+        # each with its slot numbers and a getter of its values: no test of the kind per value.
+        states = [k for k, (_, event) in enumerate(self.outputs) if not event]
+        events = [k for k, (_, event) in enumerate(self.outputs) if event]
+        self._states = (tuple(index[self.outputs[k][0]] for k in states), _getter(states))
+        self._events = (tuple(index[self.outputs[k][0]] for k in events), _getter(events))
         for slot, value in self.starts.items():   # the logic's own start values, not the type's zero
             signals.values[index[slot]] = value
 
@@ -84,14 +90,16 @@ class LogicComponent(Component):
     def sense(self, tick):
         if self.latest is None or (self.ready_at is not None and tick >= self.ready_at):
             self._fetch(tick)
-        signals = self.signals
+        signals, latest = self.signals, self.latest
         values, active = signals.values, signals.active
-        for (i, event), value in zip(self._writes, self.latest):   # Signals.emit, inlined
-            if not event:
-                if value is not None:
-                    values[i] = value
-                active[i] = True
-            elif value:
+        slots, get = self._states
+        for i, value in zip(slots, get(latest)):   # Signals.emit, inlined
+            if value is not None:
+                values[i] = value
+            active[i] = True
+        slots, get = self._events
+        for i, value in zip(slots, get(latest)):
+            if value:
                 active[i] = True
 
     def step(self, tick, ticks):
@@ -114,3 +122,13 @@ class LogicComponent(Component):
 
     def close(self):
         self.slave.close()
+
+
+def _getter(positions: list[int]):
+    """The values at `positions` of a list, as an iterable."""
+    if len(positions) > 1:
+        return operator.itemgetter(*positions)
+    if positions:
+        k = positions[0]
+        return lambda values: (values[k],)
+    return lambda values: ()
