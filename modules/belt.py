@@ -56,6 +56,7 @@ class BeltDrive(Component):
         self.field = field
         self.speed = speed
         self.running = running
+        self._applied = None   # the speed last given to the world's field
 
     def bind(self, signals, index, needed):
         super().bind(signals, index, needed)
@@ -78,7 +79,10 @@ class BeltDrive(Component):
             self.speed = values[self._speed]
         if updated[self._run]:
             self.running = values[self._run]
-        self.world.set_field_speed(self.field, self.speed if self.running else 0.0)
+        speed = self.speed if self.running else 0.0
+        if speed != self._applied:   # the field is this belt's alone: the same speed again changes nothing
+            self.world.set_field_speed(self.field, speed)
+            self._applied = speed
 
 
 PLACEMENT = {
