@@ -15,6 +15,7 @@ import traceback
 from hub.core.errors import PlanthubError, SimulationError
 from hub.bus.lockstep import RemoteSpec, misfit
 from hub.bus import wire
+from hub.core.slots import SlotType
 
 FACTORY = "participant"
 
@@ -56,6 +57,9 @@ class InProcessSlave:
         self._in_names = [name for name, _ in spec.inputs]
         out_position = {name: i for i, (name, _) in enumerate(outputs)}
         self._out_order = [out_position[name] for name, _ in spec.outputs]
+        # At every step each output is made canonical by the wire's reader of its type, which passes
+        # a value of that very type as it is; any other value goes the whole way below, which names it.
+        self._readers = [(_reader(name, kind), i) for (name, kind), i in zip(spec.outputs, self._out_order)]
         self._values: list = []
         self._guard(lambda: logic.begin(dict(spec.parameters), time), "at its start")
         self._latest = self._canonical(self._guard(logic.current_outputs, "at its start"), "at its start")
@@ -69,6 +73,10 @@ class InProcessSlave:
 
     def _canonical(self, values: list, when: str) -> list:
         """In the scenario's order, each checked and made canonical as the bus would (wire.from_wire)."""
+        try:
+            return [read(values[i]) for read, i in self._readers]
+        except (wire.WireError, TypeError):
+            pass   # the whole way, for the message
         try:
             return [wire.from_wire(kind, wire.to_wire(kind, values[i]), f"output {name!r}")
                     for (name, kind), i in zip(self.spec.outputs, self._out_order)]
@@ -94,3 +102,10 @@ class InProcessSlave:
 
     def close(self) -> None:
         self.logic.close()
+
+
+def _reader(name: str, kind: SlotType):
+    """value → canonical value of the output `name`, as from_wire(to_wire(value)) makes it."""
+    if kind in (SlotType.VEC3, SlotType.QUAT):   # to_wire makes a list of any sequence first
+        return lambda value: wire.from_wire(kind, wire.to_wire(kind, value), f"output {name!r}")
+    return wire.reader(kind)
