@@ -23,19 +23,25 @@ def step(signals, source_active, target_active, value=None, rearm=False):
         signals.emit(REARM)
 
 
+# A flow runs through `run(signals)`, or through the closure `runner(signals)` a plant's plan calls.
+BY_RUN = lambda flow, signals: flow.run(signals)          # noqa: E731
+BY_RUNNER = lambda flow, signals: flow.runner(signals)()  # noqa: E731
+
+
+@pytest.mark.parametrize("run", [BY_RUN, BY_RUNNER], ids=["run", "runner"])
 @pytest.mark.parametrize("condition, runs_when", [
     (Condition.SOURCE, {(True, True), (True, False)}),
     (Condition.TARGET, {(True, True), (False, True)}),
     (Condition.BOTH, {(True, True)}),
     (Condition.EITHER, {(True, True), (True, False), (False, True)}),
 ])
-def test_execution_condition(condition, runs_when):
+def test_execution_condition(condition, runs_when, run):
     for src in (False, True):
         for tgt in (False, True):
             signals = make_signals()
             flow = Flow(SOURCE, TARGET, condition)
             step(signals, src, tgt, value=2.5)
-            executed = flow.run(signals)
+            executed = run(flow, signals)
             assert executed == ((src, tgt) in runs_when), (condition, src, tgt)
             assert signals.updated[TARGET] == executed
             assert signals.values[TARGET] == (2.5 if executed else 0.0)
@@ -51,29 +57,31 @@ def test_target_condition_pulls_the_held_source_value():
     assert signals.values[TARGET] == 1.0
 
 
-def test_continuous_flow_runs_every_step():
+@pytest.mark.parametrize("run", [BY_RUN, BY_RUNNER], ids=["run", "runner"])
+def test_continuous_flow_runs_every_step(run):
     signals = make_signals()
     flow = Flow(SOURCE, TARGET)
     for n in range(3):
         step(signals, True, True, value=float(n))
-        assert flow.run(signals)
+        assert run(flow, signals)
         assert signals.values[TARGET] == float(n)
 
 
-def test_singular_flow_runs_once_until_rearmed():
+@pytest.mark.parametrize("run", [BY_RUN, BY_RUNNER], ids=["run", "runner"])
+def test_singular_flow_runs_once_until_rearmed(run):
     signals = make_signals()
     flow = Flow(SOURCE, TARGET, mode=Mode.SINGULAR, rearm=REARM)
     step(signals, True, True, value=1.0)
-    assert flow.run(signals)
+    assert run(flow, signals)
     step(signals, True, True, value=2.0)
-    assert not flow.run(signals)
+    assert not run(flow, signals)
     assert signals.values[TARGET] == 1.0 and not signals.updated[TARGET]
     # Re-armed in this step: it is judged after re-arming, so it executes in the same step.
     step(signals, True, True, value=3.0, rearm=True)
-    assert flow.run(signals)
+    assert run(flow, signals)
     assert signals.values[TARGET] == 3.0
     step(signals, True, True, value=4.0)
-    assert not flow.run(signals)
+    assert not run(flow, signals)
 
 
 def test_singular_flow_without_rearm_slot_stays_disarmed():
