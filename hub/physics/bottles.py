@@ -162,7 +162,8 @@ class Bottles:
                     velocities[row] = pybullet.getBaseVelocity(second, client)[0]
         dvx, dvy = fields.changes_at(f, points, velocities, b.masses[bodies])
         if transport.enabled:
-            transport.pull[bodies] = np.hypot(dvx, dvy)   # what its look at fixed geometry allows for
+            transport.pull[bodies] = np.hypot(dvx, dvy)   # what its looks allow for
+            transport.pulls[bodies, 0], transport.pulls[bodies, 1] = dvx, dvy
         if len(transport.rows):
             free = transport.free[bodies]
             if free.any():

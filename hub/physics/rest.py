@@ -32,7 +32,10 @@ tests/plant_watch.py, the bottling plant's among them).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 
 HELD_AFTER = 0.3       # s a bottle held still on a running belt stands before it rests (see Rest.candidates)
 BREAKING = 0.02        # m: Bullet widens every box by its contact breaking threshold before the pair search
@@ -120,7 +123,6 @@ class Rest:
         self.extents = np.zeros((0, 3))        # box half extents of resting bodies, fixed while they rest
         self.fields = np.zeros(0, int)         # the belt each resting body stands on (−1: none)
         self._at_rest = None                   # (rows, centres, extents) of the resting set, until it changes
-        self._span = (np.zeros(3), np.zeros(3))  # the box around all of them (lo, hi)
 
     @property
     def enabled(self) -> bool:
@@ -144,10 +146,7 @@ class Rest:
             self._at_rest = (rows, None, self.extents[rows])
         if self._at_rest[1] is None and positions is not None:
             rows, _, extents = self._at_rest
-            centres = positions[rows]
-            self._at_rest = (rows, centres, extents)
-            if len(rows):
-                self._span = (centres - extents).min(axis=0), (centres + extents).max(axis=0)
+            self._at_rest = (rows, positions[rows], extents)
         return self._at_rest
 
     def boxes(self, rows, orientations, velocities=None, spins=None) -> np.ndarray:
@@ -202,9 +201,8 @@ class Rest:
         """The awake rows whose bound comes within the boxes (centres, extents)."""
         if len(awake) == 0 or len(centres) == 0:
             return awake[:0]
-        reach = self._bounds(awake, velocities, spins)
-        gap = np.abs(positions[awake][:, None, :] - centres[None, :, :]) - extents[None, :, :]
-        return awake[(gap < reach[:, None, None]).all(axis=2).any(axis=1)]
+        return awake[_within(awake, positions, velocities, spins, self.radii, self.half_heights, self.dt,
+                             np.ascontiguousarray(centres), np.ascontiguousarray(extents))]
 
     def put(self, rows: np.ndarray, orientations, fields: np.ndarray) -> None:
         self.resting[rows] = True
@@ -219,10 +217,6 @@ class Rest:
         resting, centres, extents = self._resting_set(positions)
         if len(resting) == 0 or len(awake) == 0:
             return resting[:0]
-        # First the box around all that rests: most awake bodies are far from all of it.
-        lo, hi = self._span
-        p, reach = positions[awake], self._bounds(awake, velocities, spins)[:, None]
-        awake = awake[((p + reach > lo) & (p - reach < hi)).all(axis=1)]
         near = self._near(centres, extents, awake, positions, velocities, spins)
         if len(near) == 0:
             return resting[:0]
@@ -263,3 +257,36 @@ class Rest:
             self._at_rest = None
         self.resting[row] = False
         self.still[row] = 0
+
+
+@njit(cache=True)
+def _within(rows, positions, velocities, spins, radii, half_heights, dt, centres, extents):
+    """(len(rows),): whether each body's bound (`bounds`: its size, margins and one tick's way)
+    comes within any of the boxes (centres, extents) on every axis — the first box around all
+    of them, then box by box."""
+    near = np.zeros(rows.shape[0], np.bool_)
+    if centres.shape[0] == 0:
+        return near
+    lo, hi = centres[0] - extents[0], centres[0] + extents[0]
+    for m in range(1, centres.shape[0]):
+        for a in range(3):
+            lo[a] = min(lo[a], centres[m, a] - extents[m, a])
+            hi[a] = max(hi[a], centres[m, a] + extents[m, a])
+    for i in range(rows.shape[0]):
+        n = rows[i]
+        r, h = radii[n], half_heights[n]
+        size = math.sqrt(2.0 * r * r + h * h)
+        v = velocities[n]
+        w = spins[n]
+        speed = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * size
+        reach = size + (SHAPE_MARGIN + BREAKING) + speed * dt
+        p = positions[n]
+        if not (p[0] + reach > lo[0] and p[0] - reach < hi[0] and p[1] + reach > lo[1] and p[1] - reach < hi[1]
+                and p[2] + reach > lo[2] and p[2] - reach < hi[2]):
+            continue
+        for m in range(centres.shape[0]):
+            if (abs(p[0] - centres[m, 0]) - extents[m, 0] < reach and abs(p[1] - centres[m, 1]) - extents[m, 1] < reach
+                    and abs(p[2] - centres[m, 2]) - extents[m, 2] < reach):
+                near[i] = True
+                break
+    return near

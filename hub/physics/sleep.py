@@ -87,10 +87,13 @@ class Sleep:
         """Every resting body as the engine holds it: where planthub left it, not moving — and,
         since it is out of the collision world (Engine.leave), touched by no awake body or moving
         part, which would pass through it unseen (asked of the engine: closest points at 0; a
-        bottle may rest against fixed bodies and switchable `parts`, which wake it when they turn)."""
+        bottle may rest against fixed bodies and switchable `parts`, which wake it when they turn;
+        bottles in free transport are asked about by FreeTransport.check, at their own pose)."""
         b, client = self.bodies, self.engine.client
         resting = self.rest.rows().tolist()
         still = {b.ids[n] for n in resting} | self.engine.fixed_bodies() | parts
+        if b.free is not None:   # out of the collision world, their pose there stale (transport.check asks for them)
+            still |= {b.ids[n] for n in np.flatnonzero(b.free).tolist()}
         for n in resting:
             lo, hi = self.engine.aabb(b.ids[n])
             for other, _ in pybullet.getOverlappingObjects(lo, hi, physicsClientId=client) or ():

@@ -41,10 +41,14 @@ a free bottle, at its pose, touches anything but the floor.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit
 
 from hub.physics._quiet import quiet_stderr
-from hub.physics.rest import SHAPE_MARGIN, bounds, boxes, overlapping, swing
+from hub.physics.fields import field_at
+from hub.physics.rest import BREAKING, SHAPE_MARGIN, boxes, overlapping
 
 with quiet_stderr():
     import pybullet
@@ -56,6 +60,8 @@ SINK = 0.005          # m: most distance between its base and the belt's surface
 STILL = 0.005         # m/s: on a still belt a bottle slower than this re-enters, to rest
 FIXED_MARGIN = SHAPE_MARGIN + 0.001   # m a free bottle keeps from fixed geometry beyond its travel
 LOOKAHEAD = 4         # ticks a free bottle's tests look forward, by default
+LONG = 4              # a whole look goes this many look-aheads forward where it can
+EVERY = 15            # ticks between two looks for bottles that may leave the engine
 RETRY = 15            # ticks before a bottle found near something is looked at again
 LIST = 0.1            # m: the fixed boxes within this of a free bottle are the ones it is tested against
 
@@ -63,11 +69,13 @@ LIST = 0.1            # m: the fixed boxes within this of a free bottle are the 
 class FreeTransport:
     """The free set of a world's bodies and the tests that take bottles out of and back into the engine."""
 
-    def __init__(self, engine, bodies, fields, dt: float):
+    def __init__(self, engine, bodies, fields, rest, dt: float):
         self.engine = engine
         self.bodies = bodies
         self.fields = fields
+        self.rest = rest
         self.dt = dt
+        self.every = EVERY
         self.ahead = np.zeros(0)            # per body: the ticks its tests look forward
         self.allowed = np.zeros(0, bool)    # the bottle's kind and its `transport:` let it go free
         self.free = np.zeros(0, bool)
@@ -77,11 +85,16 @@ class FreeTransport:
         self._pair_box = np.zeros(0, int)
         self.rows = np.zeros(0, int)        # the free rows, in body order
         self.pull = np.zeros(0)             # per body: the velocity change the belt gave it at the last tick, m/s
+        self.pulls = np.zeros((0, 2))       # the same change as a vector (x, y)
         self._handed = None                 # this tick's (rows, dvx, dvy) from Bottles.drive
         self.due = 0                        # the tick at which the free bottles are looked at next
+        self.clear = np.zeros(0, int)       # per body: the tick up to which its last whole look holds
+        self._everything = False            # every free bottle is looked at whole next time (a belt's speed changed)
         self.next_try = np.zeros(0, int)    # per body: the tick from which it may be looked at to go free
         self.entered = 0                    # how many times a bottle left the engine (for figures)
         self.left = 0                       # and came back
+        self.started = 0                    # how many times a resting bottle rode off free (from_rest)
+        self.stopped = 0                    # and a free one came to rest without the engine (_settle)
         self._fixed = None                  # (centres, half extents, cos, sin) of fixed boxes
         self._spheres = (np.zeros((0, 3)), np.zeros(0))
         self._moving = None                 # MovingParts, tested at every look (their boxes move)
@@ -96,7 +109,9 @@ class FreeTransport:
         self.free = np.append(self.free, False)
         self.listed_at = np.vstack((self.listed_at, np.full((1, 2), np.inf)))
         self.pull = np.append(self.pull, 0.0)
+        self.pulls = np.vstack((self.pulls, np.zeros((1, 2))))
         self.next_try = np.append(self.next_try, 0)
+        self.clear = np.append(self.clear, 0)
 
     def arm(self, fixed_boxes, spheres, moving) -> None:
         """At the start: the fixed geometry a free bottle keeps clear of — boxes (centre, half
@@ -112,37 +127,31 @@ class FreeTransport:
         self._moving = moving
 
     # --- the tests ------------------------------------------------------------------------
-    def _gaps(self, points, radii, half_heights) -> np.ndarray:
-        """(N, boxes): how far each upright bottle's footprint at `points` is from each fixed box
-        (negative: into it); inf where they are apart in height."""
-        c, h, cos, sin = self._fixed
-        dx = points[:, 0, None] - c[None, :, 0]
-        dy = points[:, 1, None] - c[None, :, 1]
-        gx = np.maximum(np.abs(cos * dx + sin * dy) - h[:, 0], 0.0)
-        gy = np.maximum(np.abs(cos * dy - sin * dx) - h[:, 1], 0.0)
-        apart = np.abs(points[:, 2, None] - c[None, :, 2]) > h[:, 2] + half_heights[:, None] + FIXED_MARGIN
-        return np.where(apart, np.inf, np.hypot(gx, gy) - radii[:, None])
-
     def _list(self, rows, positions) -> None:
         """Note for each of `rows` the fixed boxes within LIST of it (the only ones it can reach
         before it has moved LIST/2 and is listed again)."""
         b = self.bodies
-        keep = ~np.isin(self._pair_row, rows)
-        self._pair_row, self._pair_box = self._pair_row[keep], self._pair_box[keep]
         self.listed_at[rows] = positions[rows, :2]
         if self._fixed is None:
             return
-        near = self._gaps(positions[rows], b.radii[rows], b.half_heights[rows]) < LIST
-        r, k = np.nonzero(near)
-        self._pair_row = np.concatenate([self._pair_row, rows[r]])
-        self._pair_box = np.concatenate([self._pair_box, k])
+        self._pair_row, self._pair_box = _listing(rows, positions, b.radii, b.half_heights, self._pair_row,
+                                                  self._pair_box, *self._fixed)
 
     def _fixed_hit(self, rows, times: int, positions, velocities) -> np.ndarray:
-        """(len(rows),): whether each of `rows`, headed on for `times` × its look-ahead, could
-        reach a fixed box or an arm's sphere: the distance of the way ahead (a segment, straight
-        at its velocity) from each box it may reach, against its radius widened by what the
-        belt's pull may add to the way and FIXED_MARGIN. (Its ends and the box's corners give the
-        distance whenever the segment is shorter than the bottle is wide.)"""
+        """(len(rows),): whether each of `rows`, headed on for `times` × its look-ahead (n ticks),
+        could reach a fixed box or an arm's sphere.
+
+        Its way: n ticks at its velocity v, plus what the belt's pull adds — a pull that does
+        not grow (the relaxing law, or friction's constant cap; a belt's speed change looks
+        again at once, with the pull at the new speed) moves it at most n(n+1)/2·|Δv|·dt
+        further, along the last change Δv. So at every one of the n ticks it is at
+        p + a·v·T + b·S·Δv for some a, b in [0, 1] (T = n·dt, S = n(n+1)/2·dt). The part of
+        S·Δv along v keeps it on v's line: within the three segments from p along v·T, from p
+        along that part, and from p + v·T along it; the part across v widens its radius, with
+        FIXED_MARGIN. A bottle setting off from rest on a belt between rails is pulled along
+        them, not into them. Each segment's distance from each box it may reach (listed
+        within LIST) against the radius so widened: its ends and the box's corners give the
+        distance whenever the segment is shorter than the bottle is wide."""
         b = self.bodies
         if len(rows) == 0:
             return np.zeros(0, bool)
@@ -150,38 +159,11 @@ class FreeTransport:
         stale = moved > LIST / 2.0
         if stale.any():
             self._list(rows[stale], positions)
-        p, v = positions[rows], velocities[rows]
-        horizon = self.ahead[rows] * times * self.dt
-        speed = np.hypot(v[:, 0], v[:, 1])
-        # The belt's pull relaxes: in n ticks it moves a bottle at most n(n+1)/2 of its last change·dt further.
-        n = self.ahead[rows] * times
-        widen = self.pull[rows] * n * (n + 1) / 2.0 * self.dt + FIXED_MARGIN
-        hit = np.zeros(len(rows), bool)
-        mine = np.zeros(len(self.free), int)
-        mine[rows] = np.arange(len(rows)) + 1
-        pairs = np.flatnonzero(mine[self._pair_row])
-        if len(pairs):
-            at = mine[self._pair_row[pairs]] - 1
-            c, h, cos, sin = (a[self._pair_box[pairs]] for a in self._fixed)
-            # The way ahead, a segment, in each box's frame; its distance from the box.
-            ax, ay = p[at, 0] - c[:, 0], p[at, 1] - c[:, 1]
-            ux, uy = v[at, 0] * horizon[at], v[at, 1] * horizon[at]
-            a0, a1 = cos * ax + sin * ay, cos * ay - sin * ax
-            d0, d1 = cos * ux + sin * uy, cos * uy - sin * ux
-            gap = np.minimum(_box_distance(a0, a1, h), _box_distance(a0 + d0, a1 + d1, h))
-            length2 = np.maximum(d0 * d0 + d1 * d1, 1e-300)
-            for sx, sy in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
-                kx, ky = sx * h[:, 0] - a0, sy * h[:, 1] - a1
-                t = np.clip((kx * d0 + ky * d1) / length2, 0.0, 1.0)
-                gap = np.minimum(gap, np.hypot(kx - t * d0, ky - t * d1))
-            near = ((gap < b.radii[rows[at]] + widen[at])
-                    & (np.abs(p[at, 2] - c[:, 2]) <= h[:, 2] + b.half_heights[rows[at]] + FIXED_MARGIN))
-            hit[at[near]] = True
+        c, h, cos, sin = self._fixed if self._fixed is not None else (np.zeros((0, 3)), np.zeros((0, 3)),
+                                                                       np.zeros(0), np.zeros(0))
         centres, reach = self._spheres
-        if len(reach):
-            d = np.sqrt(((p[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2)) - reach
-            hit |= (d < (b.radii[rows] + speed * horizon + widen)[:, None]).any(axis=1)
-        return hit
+        return _fixed_hit(rows, float(times), self.dt, positions, velocities, self.pulls, self.ahead, b.radii,
+                          b.half_heights, self._pair_row, self._pair_box, c, h, cos, sin, centres, reach)
 
     def steady(self, rows, orientations, velocities, spins) -> np.ndarray:
         """(len(rows),): upright and steady as a riding bottle is (tilt under TILT, spin under
@@ -191,48 +173,26 @@ class FreeTransport:
         return (((1.0 - 2.0 * (x * x + y * y) > np.cos(TILT)) & ((w * w).sum(axis=1) < SPIN * SPIN)
                  & (np.abs(velocities[rows, 2]) < RISE)) | self.free[rows])
 
-    def _touching(self, rows, times: int, positions, orientations, velocities, spins) -> np.ndarray:
-        """(len(rows),): whether each of `rows` could touch another body in play or a moving part
-        within `times` × its look-ahead. Their bounds first (rest.bounds; pairs found by a sweep
+    def _touching(self, rows, times: int, positions, orientations, velocities, spins, among=None) -> np.ndarray:
+        """(len(rows),): whether each of `rows` could touch another body in play (or of `among`)
+        or a moving part within `times` × its look-ahead. Their bounds first (rest.bounds; pairs found by a sweep
         along the plant's longer axis when there are many), then for each pair whose bounds meet:
         two steady bottles (free, or upright and steady in the engine) by their footprints and
         their relative motion — the difference of their velocities, of the belt's pull and their
         rocking brings them together, nothing else; any other pair by the wake rule's boxes,
-        each body headed as far."""
-        b = self.bodies
-        play = b.in_play_rows()
-        k = self.ahead[play] * times
-        bound = bounds(b.radii[play], b.half_heights[play], velocities[play] * k[:, None], spins[play] * k[:, None],
-                       self.dt)
-        me = np.searchsorted(play, rows)
-        i, j = _meeting(me, positions[play], bound)
-        touching = np.zeros(len(rows), bool)
-        if len(i):
-            a, o = rows[i], play[j]
-            both = np.concatenate([a, o])
-            tight = self.steady(both, orientations, velocities, spins)
-            tight = tight[:len(a)] & tight[len(a):]
-            loose = ~tight
-            if loose.any():
-                la, lo = a[loose], o[loose]
-                both, at = np.unique(np.concatenate([la, lo]), return_inverse=True)   # one boxes call for all
-                kk = (self.ahead[both] * times)[:, None]
-                box = boxes(orientations[both], b.radii[both], b.half_heights[both], velocities[both] * kk,
-                            spins[both] * kk, self.dt)
-                hit = (np.abs(positions[la] - positions[lo]) < box[at[:len(la)]] + box[at[len(la):]]).all(axis=1)
-                touching[i[loose][hit]] = True
-            if tight.any():
-                ta, to = a[tight], o[tight]
-                n = np.maximum(self.ahead[ta], self.ahead[to]) * times
-                apart = positions[ta] - positions[to]
-                closing = velocities[ta, :2] - velocities[to, :2]
-                rock = (swing(b.radii[ta], b.half_heights[ta], spins[ta])
-                        + swing(b.radii[to], b.half_heights[to], spins[to]))
-                reach = ((np.hypot(closing[:, 0], closing[:, 1]) + rock) * n * self.dt
-                         + (self.pull[ta] + self.pull[to]) * n * (n + 1) / 2.0 * self.dt)
-                gap = np.hypot(apart[:, 0], apart[:, 1]) - b.radii[ta] - b.radii[to] - 2.0 * SHAPE_MARGIN
-                hit = (gap < reach) & (np.abs(apart[:, 2]) < b.half_heights[ta] + b.half_heights[to])
-                touching[i[tight][hit]] = True
+        each body headed as far.
+
+        Two steady bottles on one straight belt whose law scales with the mass, both staying
+        on it as far as the look goes (`belt`), follow the same law, which never lets two
+        velocities part — on u = v_belt − v it is u ↦ k·u, or with friction's cap
+        u ↦ u − (1 − k)·P(u), P the projection onto a ball: both non-expansive — so their gap
+        changes by at most n·|v_a − v_b|·dt, however hard the belt pulls: a line of bottles
+        setting off from rest together stays a line. One compiled loop (`_touching` below)."""
+        b, fields = self.bodies, self.fields
+        play = b.in_play_rows() if among is None else np.union1d(rows, among)
+        touching, bound = _touching(rows, play, float(times), self.dt, positions, orientations, velocities, spins,
+                                    b.radii, b.half_heights, self.ahead, self.pull, self.pulls, self.free,
+                                    fields.straight_law, fields.regions())
         moving = self._moving
         if moving is not None and moving.parts:
             # A part's box as the wake rule widens it for one tick, and headed as far again as the
@@ -240,22 +200,24 @@ class FreeTransport:
             horizon = float(self.ahead[rows].max()) * times * self.dt
             centres = np.array([p.box()[0] for p in moving.parts])
             extents = np.array([p.box()[1] + np.abs(p.axis) * abs(p.velocity) * horizon for p in moving.parts])
-            mine = np.repeat(bound[me][:, None], 3, axis=1)
+            mine = np.repeat(bound[:, None], 3, axis=1)
             touching |= overlapping(positions[rows], mine, centres, extents).any(axis=1)
         return touching
 
-    def _on_belt(self, rows, now, times: int, positions, velocities) -> np.ndarray:
-        """(len(rows),): riding a belt now (`now`: the field under each) and, `times` × its
-        look-ahead on, one at the same height; not coming to a stop on a still belt."""
+    def _on_belt(self, rows, now, times: int, positions, velocities) -> tuple[np.ndarray, np.ndarray]:
+        """(ok, still), each (len(rows),): riding a belt now (`now`: the field under each) and,
+        `times` × its look-ahead on, one at the same height, not coming to a stop on a still
+        belt (ok); on a belt, coming to a stop on a still one (still)."""
         fields = self.fields
         there = fields.which(positions[rows] + velocities[rows] * (self.ahead[rows, None] * times * self.dt))
         ok = (now >= 0) & (there >= 0)
         ok[ok] = fields.surfaces[now[ok]] == fields.surfaces[there[ok]]
+        still = np.zeros(len(rows), bool)
         if ok.any():
             v = velocities[rows]
-            still = (fields.speeds[np.maximum(now, 0)] == 0.0) & ((v[:, 0] ** 2 + v[:, 1] ** 2) < STILL * STILL)
+            still = ok & (fields.speeds[np.maximum(now, 0)] == 0.0) & ((v[:, 0] ** 2 + v[:, 1] ** 2) < STILL * STILL)
             ok &= ~still
-        return ok
+        return ok, still
 
     def _fields(self, rows, read_rows, under, positions) -> np.ndarray:
         """The field under each of `rows` as the last read found it (`under`, per `read_rows`),
@@ -265,25 +227,59 @@ class FreeTransport:
         return under[rows] if read_rows is None else under[np.searchsorted(read_rows, rows)]
 
     # --- before a tick: who must come back ------------------------------------------------
-    def release_near(self, tick: int, placed: dict, moving: bool) -> None:
+    def release_near(self, tick: int, placed: dict, moving: bool, awake: np.ndarray) -> None:
         """Before a tick: free bottles that could be touched within their look-ahead re-enter the
-        engine. A look at the state of `tick` holds for the look-ahead's ticks, so it is taken
-        once every look-ahead less one tick — and at once after a body was put down (`placed`),
-        while a moving part is under way (`moving`) or after a belt changed its speed."""
+        engine; one that came to a stop on a still belt with nothing near rests.
+
+        A look at the state of `tick` holds for the ticks it looked ahead, so looks are taken
+        once every look-ahead less one tick, and a bottle is looked at whole only when the last
+        whole look at it runs out (`clear`): then LONG × its look-ahead forward, or its look-ahead
+        where that is too far. Everything it was looked at against moves by a law that look
+        bounds — fixed geometry and resting bodies stand, free bottles follow their belts, a
+        belt's pull does not grow — except the bodies awake in the engine, which contacts may
+        throw: against those (`awake`) every free bottle is looked at each time. Every free
+        bottle is looked at whole at once after a body was put down (`placed`), while a moving
+        part is under way (`moving`) and after a belt changed its speed."""
         rows = self.rows
         if len(rows) == 0 or (tick < self.due and not placed and not moving):
             return
-        self.due = tick + max(1, int(self.ahead[rows].min()) - 1)
+        ahead = self.ahead[rows]
+        self.due = tick + max(1, int(ahead.min()) - 1)
         b = self.bodies
         positions = b.positions
         if placed:   # bodies put down since the last read stand there already
             positions = positions.copy()
             for n, centre in placed.items():
                 positions[n] = centre
-        now = self._fields(rows, b.moved_rows, b.moved_under, positions)
-        back = ~self._on_belt(rows, now, 1, positions, b.velocities)
-        back |= self._fixed_hit(rows, 1, positions, b.velocities)
-        back |= self._touching(rows, 1, positions, b.orientations, b.velocities, b.angular_velocities)
+        state = positions, b.orientations, b.velocities, b.angular_velocities
+        whole = placed or moving or self._everything
+        self._everything = False
+        due = np.ones(len(rows), bool) if whole else self.clear[rows] < tick + ahead
+        back = np.zeros(len(rows), bool)
+        if not due.all() and len(awake):
+            # The others against the bodies awake in the engine only.
+            rest = ~due
+            back[rest] = self._touching(rows[rest], 1, *state, among=awake)
+        if due.any():
+            look = rows[due]
+            now = self._fields(look, b.moved_rows, b.moved_under, positions)
+            # LONG looks ahead first; what that finds near is looked at one look-ahead forward.
+            ok, still = self._on_belt(look, now, LONG, positions, b.velocities)
+            near = self._touching(look, LONG, *state) | self._fixed_hit(look, LONG, positions, b.velocities)
+            far = ok & ~near
+            self.clear[look[far]] = tick + LONG * self.ahead[look[far]]
+            short = ~far
+            if short.any():
+                ok1, still1 = self._on_belt(look[short], now[short], 1, positions, b.velocities)
+                near1 = (self._touching(look[short], 1, *state)
+                         | self._fixed_hit(look[short], 1, positions, b.velocities))
+                ok[short], still[short], near[short] = ok1, still1, near1
+                self.clear[look[short]] = tick + self.ahead[look[short]]
+            # One that stops on a still belt with nothing near rests at once, without the engine.
+            settle = still & ~near & self.rest.allowed[look]
+            if settle.any():
+                self._settle(look[settle], now[settle])
+            back[due] = (~ok | near) & ~settle
         if back.any():
             self.release(rows[back])
 
@@ -302,6 +298,53 @@ class FreeTransport:
         self.left += len(rows)
         self._changed()
 
+    def _settle(self, rows, field) -> None:
+        """Free `rows` that came to a stop on a still belt go straight to rest (rest.py): their
+        pose put into the engine and read back as the engine holds it (the resting set's pose is
+        the engine's, bit for bit), velocity and spin zero. They stay out of its collision world
+        and asleep, as free and resting bodies both are. What is left of their speed (under
+        STILL) is dropped: on a still belt it would take them at most STILL/k further (0.3 mm at
+        k = 16/s)."""
+        b, call = self.bodies, self.engine.call
+        for n in rows.tolist():
+            body = b.ids[n]
+            call(pybullet.resetBasePositionAndOrientation, body, b.positions[n].tolist(), b.orientations[n].tolist())
+            call(pybullet.resetBaseVelocity, body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+            self.engine.sleep(body)
+            position, orientation = call(pybullet.getBasePositionAndOrientation, body)
+            b.positions[n], b.orientations[n] = position, orientation
+        b.velocities[rows] = 0.0
+        b.angular_velocities[rows] = 0.0
+        self.rest.put(rows, b.orientations, field)
+        self.free[rows] = False
+        self.stopped += len(rows)
+        self._changed()
+
+    def from_rest(self, rows: np.ndarray) -> np.ndarray:
+        """A belt's speed changed under the resting `rows` (rest.on_field: those on it and their
+        groups). Those that may ride free and pass `take_free`'s tests as they stand — their
+        velocity zero, the belt's pull at its new speed — ride off free straight from rest: they
+        are already out of the engine's collision world and asleep there, with their exact pose.
+        Returns the others, which the engine must wake."""
+        b = self.bodies
+        zero = np.zeros((len(rows), 3))
+        field = self.fields.which(b.positions[rows])
+        on = field >= 0
+        # The pull each gets at the belt's new speed (a resting body's `pull` is from before it rested).
+        dvx, dvy = self.fields.changes_at(field[on], b.positions[rows[on]], zero[on], b.masses[rows[on]])
+        self.pull[rows] = 0.0
+        self.pulls[rows] = 0.0
+        self.pull[rows[on]] = np.hypot(dvx, dvy)
+        self.pulls[rows[on], 0], self.pulls[rows[on], 1] = dvx, dvy
+        go = self._leaving(rows[self.allowed[rows]])[0]
+        if len(go) == 0:
+            return rows
+        self.rest.wake(go)
+        self.free[go] = True
+        self.started += len(go)
+        self._changed()
+        return rows[~np.isin(rows, go)]
+
     def forget(self, row: int) -> None:
         """The body left play (parked): no longer free, nothing to put back."""
         if self.free[row]:
@@ -319,39 +362,49 @@ class FreeTransport:
             rows = rows[~np.isin(rows, held)]
         if len(rows) == 0:
             return
+        go, near = self._leaving(rows, b.live_rows, b.under)
+        self.next_try[near] = tick + RETRY
+        if len(go) == 0:
+            return
+        for n in go.tolist():
+            self.engine.leave(b.ids[n])
+        self.clear[go] = tick + 2 * self.ahead[go]
+        b.velocities[go, 2] = 0.0
+        b.angular_velocities[go] = 0.0
+        self.free[go] = True
+        self.entered += len(go)
+        self._changed()
+
+    def _leaving(self, rows, read_rows=None, under=None) -> tuple[np.ndarray, np.ndarray]:
+        """(go, near): of `rows`, those upright and steady, standing on a belt (base within SINK
+        of its surface) and passing the tests `2·ahead` ticks forward; and those that ride a belt
+        but are near something."""
+        b = self.bodies
         p, q, v, w = b.positions, b.orientations, b.velocities, b.angular_velocities
+        none = rows[:0]
         rows = rows[self.steady(rows, q, v, w)]
         if len(rows) == 0:
-            return
-        field = self._fields(rows, b.live_rows, b.under, p)
+            return none, none
+        field = self._fields(rows, read_rows, under, p)
         on = field >= 0
         rows, field = rows[on], field[on]
         base = p[rows, 2] - b.half_heights[rows]
         level = np.abs(base - self.fields.surfaces[field]) < SINK
         rows, field = rows[level], field[level]
         if len(rows) == 0:
-            return
-        rows = rows[self._on_belt(rows, field, 2, p, v)]     # twice the look-ahead, as below
+            return none, none
+        rows = rows[self._on_belt(rows, field, 2, p, v)[0]]     # twice the look-ahead, as below
         if len(rows) == 0:
-            return
+            return none, none
         near = self._touching(rows, 2, p, q, v, w)
         near[~near] = self._fixed_hit(rows[~near], 2, p, v)
-        self.next_try[rows[near]] = tick + RETRY
-        rows = rows[~near]
-        if len(rows) == 0:
-            return
-        for n in rows.tolist():
-            self.engine.leave(b.ids[n])
-        v[rows, 2] = 0.0
-        w[rows] = 0.0
-        self.free[rows] = True
-        self.entered += len(rows)
-        self._changed()
+        return rows[~near], rows[near]
 
     # --- the tick itself --------------------------------------------------------------------
     def speed_changed(self) -> None:
-        """A belt's speed changed: the free bottles are looked at before the next tick."""
+        """A belt's speed changed: the free bottles are looked at whole before the next tick."""
         self.due = 0
+        self._everything = True
 
     def hand(self, rows, dvx, dvy) -> None:
         """Before the engine's step: the velocity changes the belts' law gives the free `rows` on
@@ -418,39 +471,220 @@ class FreeTransport:
         return shape
 
 
-def _box_distance(x, y, half) -> np.ndarray:
-    """Distance from points (x, y), in a box's frame, to the box of half extents `half` (0 inside)."""
-    return np.hypot(np.maximum(np.abs(x) - half[:, 0], 0.0), np.maximum(np.abs(y) - half[:, 1], 0.0))
+@njit(cache=True)
+def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, pair_row, pair_box,
+               c, h, cos, sin, centres, reach):
+    """FreeTransport._fixed_hit after the listing, row by row and pair by pair."""
+    hit = np.zeros(rows.shape[0], np.bool_)
+    mine = np.zeros(ahead.shape[0], np.int64)
+    for i in range(rows.shape[0]):
+        mine[rows[i]] = i + 1
+    # Per row: its way at its velocity (wx, wy), the pull's way along it (gx, gy) and the widening across.
+    wx, wy = np.empty(rows.shape[0]), np.empty(rows.shape[0])
+    gx, gy = np.empty(rows.shape[0]), np.empty(rows.shape[0])
+    widen, length = np.empty(rows.shape[0]), np.empty(rows.shape[0])
+    for i in range(rows.shape[0]):
+        n_ = rows[i]
+        n = ahead[n_] * times
+        vx, vy = velocities[n_, 0], velocities[n_, 1]
+        grow = n * (n + 1.0) / 2.0 * dt
+        sx, sy = pulls[n_, 0] * grow, pulls[n_, 1] * grow
+        speed = math.hypot(vx, vy)
+        if speed == 0.0:
+            along, across = math.hypot(sx, sy), 0.0
+            ux, uy = (sx / along, sy / along) if along > 0.0 else (1.0, 0.0)
+        else:
+            ux, uy = vx / speed, vy / speed
+            along, across = sx * ux + sy * uy, abs(sx * uy - sy * ux)
+        wx[i], wy[i] = vx * n * dt, vy * n * dt
+        gx[i], gy[i] = ux * along, uy * along
+        widen[i] = across + FIXED_MARGIN
+        length[i] = speed * n * dt + abs(along)
+    for q in range(pair_row.shape[0]):
+        i = mine[pair_row[q]] - 1
+        if i < 0 or hit[i]:
+            continue
+        n_, k = rows[i], pair_box[q]
+        px, py = positions[n_, 0], positions[n_, 1]
+        if abs(positions[n_, 2] - c[k, 2]) > h[k, 2] + half_heights[n_] + FIXED_MARGIN:
+            continue
+        ax, ay = px - c[k, 0], py - c[k, 1]
+        a0, a1 = cos[k] * ax + sin[k] * ay, cos[k] * ay - sin[k] * ax
+        d0, d1 = cos[k] * wx[i] + sin[k] * wy[i], cos[k] * wy[i] - sin[k] * wx[i]
+        e0, e1 = cos[k] * gx[i] + sin[k] * gy[i], cos[k] * gy[i] - sin[k] * gx[i]
+        gap = min(_segment_gap(a0, a1, d0, d1, h[k, 0], h[k, 1]), _segment_gap(a0, a1, e0, e1, h[k, 0], h[k, 1]),
+                  _segment_gap(a0 + d0, a1 + d1, e0, e1, h[k, 0], h[k, 1]))
+        if gap < radii[n_] + widen[i]:
+            hit[i] = True
+    for i in range(rows.shape[0]):
+        n_ = rows[i]
+        for m in range(reach.shape[0]):
+            d = math.sqrt((positions[n_, 0] - centres[m, 0]) ** 2 + (positions[n_, 1] - centres[m, 1]) ** 2
+                          + (positions[n_, 2] - centres[m, 2]) ** 2) - reach[m]
+            if d < radii[n_] + length[i] + widen[i]:
+                hit[i] = True
+    return hit
 
 
-SWEEP = 20000   # (rows × bodies) above which pairs are found by a sweep rather than all at once
+@njit(cache=True)
+def _listing(rows, positions, radii, half_heights, pair_row, pair_box, c, h, cos, sin):
+    """The (bottle, fixed box) pairs: those of other bottles than `rows` kept, and for each of
+    `rows` the boxes its upright footprint is within LIST of (apart in height: not listed)."""
+    again = np.zeros(radii.shape[0], np.bool_)
+    for n in rows:
+        again[n] = True
+    out_row, out_box = [], []
+    for q in range(pair_row.shape[0]):
+        if not again[pair_row[q]]:
+            out_row.append(pair_row[q])
+            out_box.append(pair_box[q])
+    for n in rows:
+        for k in range(c.shape[0]):
+            if abs(positions[n, 2] - c[k, 2]) > h[k, 2] + half_heights[n] + FIXED_MARGIN:
+                continue
+            dx, dy = positions[n, 0] - c[k, 0], positions[n, 1] - c[k, 1]
+            gx = max(abs(cos[k] * dx + sin[k] * dy) - h[k, 0], 0.0)
+            gy = max(abs(cos[k] * dy - sin[k] * dx) - h[k, 1], 0.0)
+            if math.hypot(gx, gy) - radii[n] < LIST:
+                out_row.append(n)
+                out_box.append(k)
+    return np.array(out_row, np.int64), np.array(out_box, np.int64)
 
 
-def _meeting(me, points, bound):
-    """The pairs (i, j): row i of `me` (indices into `points`) and point j whose boxes of half
-    extent `bound` (per point, every axis) overlap, j ≠ me[i]."""
-    if len(me) * len(points) <= SWEEP:
-        gap = np.abs(points[me][:, None, :] - points[None, :, :]) - bound[me][:, None, None] - bound[None, :, None]
-        meet = (gap < 0.0).all(axis=2)
-        meet[np.arange(len(me)), me] = False
-        return np.nonzero(meet)
-    # Sorted along the longer axis, each point against the next, the one after, …, until no pair is near.
-    axis = int(np.argmax(np.ptp(points[:, :2], axis=0)))
-    order = np.argsort(points[:, axis], kind="stable")
-    p, r = points[order], bound[order]
-    wanted = np.full(len(points), -1)
-    wanted[me] = np.arange(len(me))
-    w = wanted[order]
-    found_i, found_j = [], []
-    for shift in range(1, len(p)):
-        near = (np.abs(p[shift:] - p[:-shift]) < (r[shift:] + r[:-shift])[:, None]).all(axis=1)
-        if not (p[shift:, axis] - p[:-shift, axis] < r[shift:] + r[:-shift]).any():
-            break
-        lo, hi = np.flatnonzero(near), np.flatnonzero(near) + shift
-        for x, y in ((lo, hi), (hi, lo)):
-            keep = w[x] >= 0
-            found_i.append(w[x][keep])
-            found_j.append(order[y][keep])
-    if not found_i:
-        return np.zeros(0, int), np.zeros(0, int)
-    return np.concatenate(found_i), np.concatenate(found_j)
+@njit(cache=True)
+def _segment_gap(a0, a1, d0, d1, hx, hy):
+    """Distance from the segment from (a0, a1) along (d0, d1), in a box's frame, to the box of
+    half extents (hx, hy): its ends', and the box corners' from it (exact unless the segment is
+    longer than the box and crosses it)."""
+    gap = min(_box_distance(a0, a1, hx, hy), _box_distance(a0 + d0, a1 + d1, hx, hy))
+    length2 = max(d0 * d0 + d1 * d1, 1e-300)
+    for sx in (1.0, -1.0):
+        for sy in (1.0, -1.0):
+            kx, ky = sx * hx - a0, sy * hy - a1
+            t = min(max((kx * d0 + ky * d1) / length2, 0.0), 1.0)
+            gap = min(gap, math.hypot(kx - t * d0, ky - t * d1))
+    return gap
+
+
+@njit(cache=True)
+def _box_distance(x, y, hx, hy):
+    """Distance from the point (x, y), in a box's frame, to the box of half extents (hx, hy) (0 inside)."""
+    return math.hypot(max(abs(x) - hx, 0.0), max(abs(y) - hy, 0.0))
+
+
+@njit(cache=True)
+def _touching(rows, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, pull,
+              pulls, free, straight_law, regions):
+    """FreeTransport._touching between bodies: (touching per row, each row's bound). `play` is
+    sorted and holds `rows`; `straight_law` per field: straight, its law scaled by the mass;
+    `regions`: ForceFields.regions. Pairs by their bounds (rest.bounds), found along
+    the plant's longer axis from each row outwards, then as FreeTransport._touching says."""
+    count = play.shape[0]
+    bound = np.empty(count)
+    steady = np.empty(count, np.bool_)
+    belt = np.full(count, -1, np.int64)
+    tilt = math.cos(TILT)
+    farthest = 0.0
+    for q in range(count):
+        farthest = max(farthest, ahead[play[q]] * times)
+    m = farthest
+    for q in range(count):
+        n = play[q]
+        # The straight belt with a mass-scaled law it stays on as far as the farthest look goes.
+        x, y, z = positions[n, 0], positions[n, 1], positions[n, 2]
+        now = field_at(x, y, z, *regions)
+        if now >= 0 and straight_law[now]:
+            grow = m * (m + 1.0) / 2.0 * dt
+            there = field_at(x + velocities[n, 0] * m * dt + pulls[n, 0] * grow,
+                             y + velocities[n, 1] * m * dt + pulls[n, 1] * grow, z, *regions)
+            if there == now:
+                belt[q] = now
+        k = ahead[n] * times
+        r, h = radii[n], half_heights[n]
+        size = math.sqrt(2.0 * r * r + h * h)
+        v, w = velocities[n], spins[n]
+        spin = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+        bound[q] = (size + (SHAPE_MARGIN + BREAKING)
+                    + (math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + spin * size) * k * dt)
+        x, y = orientations[n, 0], orientations[n, 1]
+        steady[q] = free[n] or (1.0 - 2.0 * (x * x + y * y) > tilt and spin < SPIN and abs(v[2]) < RISE)
+    lo_x, hi_x, lo_y, hi_y = np.inf, -np.inf, np.inf, -np.inf
+    for q in range(count):
+        lo_x = min(lo_x, positions[play[q], 0])
+        hi_x = max(hi_x, positions[play[q], 0])
+        lo_y = min(lo_y, positions[play[q], 1])
+        hi_y = max(hi_y, positions[play[q], 1])
+    axis = 0 if hi_x - lo_x >= hi_y - lo_y else 1
+    key = np.empty(count)
+    for q in range(count):
+        key[q] = positions[play[q], axis]
+    order = np.argsort(key, kind="mergesort")
+    rank = np.empty(count, np.int64)
+    for q in range(count):
+        rank[order[q]] = q
+    widest = bound.max() if count else 0.0
+    touching = np.zeros(rows.shape[0], np.bool_)
+    mine = np.empty(rows.shape[0])
+    for i in range(rows.shape[0]):
+        a = np.searchsorted(play, rows[i])
+        mine[i] = bound[a]
+        for step in (1, -1):
+            t = rank[a] + step
+            while 0 <= t < count and not touching[i]:
+                o = order[t]
+                if abs(key[o] - key[a]) >= bound[a] + widest:
+                    break
+                t += step
+                if _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights,
+                         ahead, pull, belt, bound, steady):
+                    touching[i] = True
+    return touching, mine
+
+
+@njit(cache=True)
+def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, pull, belt,
+          bound, steady):
+    """Whether bodies play[a] and play[o] could touch within the look (FreeTransport._touching)."""
+    na, no = play[a], play[o]
+    reach = bound[a] + bound[o]
+    for c in range(3):
+        if abs(positions[na, c] - positions[no, c]) >= reach:
+            return False
+    if steady[a] and steady[o]:
+        n = max(ahead[na], ahead[no]) * times
+        ax, ay = positions[na, 0] - positions[no, 0], positions[na, 1] - positions[no, 1]
+        if abs(positions[na, 2] - positions[no, 2]) >= half_heights[na] + half_heights[no]:
+            return False
+        closing = math.hypot(velocities[na, 0] - velocities[no, 0], velocities[na, 1] - velocities[no, 1])
+        rock = _swing(radii[na], half_heights[na], spins[na]) + _swing(radii[no], half_heights[no], spins[no])
+        way = (closing + rock) * n * dt
+        if not (belt[a] >= 0 and belt[a] == belt[o]):
+            way += (pull[na] + pull[no]) * n * (n + 1.0) / 2.0 * dt
+        return math.hypot(ax, ay) - radii[na] - radii[no] - 2.0 * SHAPE_MARGIN < way
+    ka, ko = ahead[na] * times, ahead[no] * times
+    for c in range(3):
+        extent = (_extent(orientations[na], radii[na], half_heights[na], velocities[na], spins[na], ka * dt, c)
+                  + _extent(orientations[no], radii[no], half_heights[no], velocities[no], spins[no], ko * dt, c))
+        if abs(positions[na, c] - positions[no, c]) >= extent:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _swing(r, h, w):
+    return math.sqrt((w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * (2.0 * r * r + h * h))
+
+
+@njit(cache=True)
+def _extent(q, r, h, v, w, horizon, axis):
+    """rest.boxes for one body on one axis: Σⱼ |Rᵢⱼ|·lⱼ turned into the world, margins and the
+    breaking threshold, and its way over `horizon` s at its velocity and spin, both ways."""
+    x, y, z, s = q[0], q[1], q[2], q[3]
+    if axis == 0:
+        row = (s * s + x * x - y * y - z * z, 2.0 * (x * y - s * z), 2.0 * (x * z + s * y))
+    elif axis == 1:
+        row = (2.0 * (x * y + s * z), s * s - x * x + y * y - z * z, 2.0 * (y * z - s * x))
+    else:
+        row = (2.0 * (x * z - s * y), 2.0 * (y * z + s * x), s * s - x * x - y * y + z * z)
+    extent = abs(row[0]) * r + abs(row[1]) * r + abs(row[2]) * h + SHAPE_MARGIN + BREAKING
+    return extent + (abs(v[axis]) + _swing(r, h, w)) * horizon

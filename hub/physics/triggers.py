@@ -4,6 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from hub.physics.frames import Boxes
 
@@ -70,8 +71,7 @@ class VolumeTriggers:
         `moved`: the only bodies that can have moved since the last evaluation (the others, at
         rest, keep their occupancy); None: any of `rows`.
 
-        Runs at every tick: written on (triggers, bodies) arrays per coordinate, which costs half
-        of the same test on (triggers, bodies, 3) arrays with einsum."""
+        Runs at every tick: the test is one compiled loop over (triggers, bodies) (`_overlap`)."""
         if len(self) == 0:
             return False
         if moved is not None and self._inside.shape == (len(self), len(positions)):
@@ -105,17 +105,12 @@ class VolumeTriggers:
             self.latches[t].left.append((tick, int(n)))
         return True
 
-    def _test(self, positions, radii, half_heights, boxes=slice(None)) -> np.ndarray:
+    def _test(self, positions, radii, half_heights, boxes=None) -> np.ndarray:
         """(triggers, bodies): whether each upright cylinder overlaps each box (or those of `boxes`)."""
         b = self.boxes
-        centers, half_extents = b.centers[boxes], b.half_extents[boxes]
-        dx = positions[:, 0] - centers[:, 0, None]
-        dy = positions[:, 1] - centers[:, 1, None]
-        c, s = b.cos[boxes, None], b.sin[boxes, None]
-        gx = np.maximum(np.abs(c * dx + s * dy) - half_extents[:, 0, None], 0.0)
-        gy = np.maximum(np.abs(c * dy - s * dx) - half_extents[:, 1, None], 0.0)
-        return ((gx * gx + gy * gy <= radii * radii)
-                & (np.abs(positions[:, 2] - centers[:, 2, None]) <= half_extents[:, 2, None] + half_heights))
+        which = np.arange(len(b)) if boxes is None else np.asarray(boxes, np.int64)
+        return _overlap(np.ascontiguousarray(positions, float), np.ascontiguousarray(radii, float),
+                        np.ascontiguousarray(half_heights, float), which, b.centers, b.half_extents, b.cos, b.sin)
 
     def occupied(self) -> np.ndarray:
         """Per trigger: whether a body is inside at the last evaluation."""
@@ -142,3 +137,23 @@ class VolumeTriggers:
         latch.inside = self._occupants[trigger]
         self.latches[trigger] = Latch()
         return latch
+
+
+@njit(cache=True)
+def _overlap(positions, radii, half_heights, boxes, centers, half_extents, cos, sin):
+    """(len(boxes), bodies): whether each upright cylinder (centre, radius, half height) overlaps
+    each of the yawed `boxes`: in the box's frame the horizontal distance from its axis to the
+    box at most its radius, and the heights overlapping."""
+    out = np.zeros((boxes.shape[0], positions.shape[0]), np.bool_)
+    for t in range(boxes.shape[0]):
+        k = boxes[t]
+        cx, cy, cz = centers[k, 0], centers[k, 1], centers[k, 2]
+        hx, hy, hz = half_extents[k, 0], half_extents[k, 1], half_extents[k, 2]
+        c, s = cos[k], sin[k]
+        for n in range(positions.shape[0]):
+            dx, dy = positions[n, 0] - cx, positions[n, 1] - cy
+            gx = max(abs(c * dx + s * dy) - hx, 0.0)
+            gy = max(abs(c * dy - s * dx) - hy, 0.0)
+            out[t, n] = (gx * gx + gy * gy <= radii[n] * radii[n]
+                         and abs(positions[n, 2] - cz) <= hz + half_heights[n])
+    return out

@@ -104,7 +104,7 @@ class PhysicsWorld:
         self.check_rest = False                 # compare resting bodies with the engine at every tick (tests)
         self.check_free = False                 # ask the engine whether a free bottle touches anything, every tick (tests)
         self.bodies = Bodies(self._client, self.rest)
-        self.transport = FreeTransport(self.engine, self.bodies, self.fields, self.dt)
+        self.transport = FreeTransport(self.engine, self.bodies, self.fields, self.rest, self.dt)
         self.bottles = Bottles(self.engine, self.bodies, self.rest, self.transport)
         self.sleep = Sleep(self.engine, self.bodies, self.rest)
         self.parts = SwitchableParts(self.engine, self.sleep)
@@ -196,16 +196,20 @@ class PhysicsWorld:
         return field
 
     def set_field_speed(self, field: int, speed: float) -> None:
-        """A belt's speed; bodies resting on it wake when it changes. The same speed again (every
+        """A belt's speed; bodies resting on it wake when it changes — those that may ride free
+        and nothing can touch ride off free instead (transport.py). The same speed again (every
         belt sets its speed at every communication point) changes nothing and costs nothing: the
         watch's bound follows the speeds a belt changes to (it starts from those at load)."""
         if speed == self.fields.speeds[field]:
             return
-        if self.rest.resting.any():
-            self.sleep.wake(self.rest.on_field(field, self.bodies.positions))
         self.watch.belt_speed(speed)
         self.transport.speed_changed()
         self.fields.set_speed(field, speed)
+        if self.rest.resting.any():
+            rows = self.rest.on_field(field, self.bodies.positions)
+            if self.transport.enabled and len(rows):
+                rows = self.transport.from_rest(rows)
+            self.sleep.wake(rows)
 
     def add_cylinder(self, base, radius: float, height: float, mass: float, label: str) -> int:
         row = self.bottles.add_cylinder(base, radius, height, mass, label)
@@ -353,7 +357,7 @@ class PhysicsWorld:
         free = transport.enabled
         for done in range(1, substeps + 1):
             if free and len(transport.rows):
-                transport.release_near(self.tick, b.placed, moving.moving)
+                transport.release_near(self.tick, b.placed, moving.moving, b.awake_rows())
             if rest.resting.any():
                 sleep.wake_near()
                 if moving.moving:
@@ -379,11 +383,10 @@ class PhysicsWorld:
                 sleep.check(self.tick, self.parts.bodies())
             if self.check_free:
                 transport.check(self.tick, self.engine.floors)
-            if self.tick % rest.every == 0:
-                if rest.enabled:
-                    sleep.settle(self.fields, arms.held_rows(), moving)
-                if free:
-                    transport.take_free(self.tick, b.awake_rows(), arms.held_rows())
+            if self.tick % rest.every == 0 and rest.enabled:
+                sleep.settle(self.fields, arms.held_rows(), moving)
+            if free and self.tick % transport.every == 0:
+                transport.take_free(self.tick, b.awake_rows(), arms.held_rows())
             if event and stop_on_event:
                 return done
         return substeps

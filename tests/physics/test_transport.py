@@ -124,3 +124,63 @@ def test_what_free_transport_cannot_move_is_refused_by_name(tmp_path):
         world.add_bottle((0, 0, 0), 0.03, 0.1, 0.05, "b", transport="free")
     with PhysicsWorld(150) as world, pytest.raises(ValueError, match="look-ahead must be a whole number of ticks, at least 2"):
         world.add_bottle((0, 0, 0), 0.03, 0.1, 0.05, "b", transport="exact", lookahead=1)
+
+
+def magazine(transport: str):
+    """A line of five bottles 4 cm apart resting on a stopped belt between rails (gripping with
+    friction, μ = 0.3, as the bottling plant's magazine does), which then runs for 1 s at
+    0.5 m/s and stops: (the world's positions after each phase, the world), the engine asked
+    at every tick about every resting and free bottle."""
+    world = PhysicsWorld(150)
+    world.check_free = world.check_rest = True
+    world.add_support(0.0, (0.0, -0.07, 3.0, 0.07))
+    belt = world.add_belt_field(Straight(Pose(0.0, 0.0, 0.0, 0.0), 3.0), 0.05, -0.02, 0.1, 16.0, 0.0, friction=0.3)
+    for side in (1, -1):
+        world.add_static_box((1.5, side * 0.06, 0.04), (1.5, 0.01, 0.04))
+    for k in range(5):
+        world.add_bottle((0.2 + 0.1 * k, 0, 0), 0.03, 0.1, 0.05, f"b{k}", transport=transport)
+    ends = []
+    world.step(60)
+    ends.append(world.positions.copy())
+    world.set_field_speed(belt, 0.5)
+    world.step(150)
+    ends.append(world.positions.copy())
+    world.set_field_speed(belt, 0.0)
+    world.step(150)
+    ends.append(world.positions.copy())
+    return ends, world
+
+
+def test_a_resting_line_rides_off_free_when_its_belt_starts_and_rests_again_without_the_engine():
+    (_, engine_run, engine_end), engine = magazine("engine")
+    engine.close()
+    (rested, running, end), world = magazine("exact")
+    with world:
+        t = world.transport
+        assert t.started == 5 and t.stopped == 5     # from rest to free and back, each bottle once
+        assert t.entered == 0 and t.left == 0         # never through the engine
+        assert world.rest.resting.all()
+        # A line setting off together stays a line: the same law for each, to rounding.
+        gaps = np.diff(running[:, 0])
+        assert np.abs(gaps - np.diff(rested[:, 0])).max() < 1e-12
+        # Against the engine moving them all the way: within a millimetre, after 1 s and the stop.
+        assert np.abs(running[:, :2] - engine_run[:, :2]).max() < 1e-3
+        assert np.abs(end[:, :2] - engine_end[:, :2]).max() < 1e-3
+
+
+def test_a_bottle_setting_off_between_rails_is_pulled_along_them_not_into_them():
+    # Its look at the rails sees the pull along the belt (2 cm from each rail): it goes free at once.
+    with PhysicsWorld(150) as world:
+        world.add_support(0.0, (0.0, -0.07, 3.0, 0.07))
+        belt = world.add_belt_field(Straight(Pose(0.0, 0.0, 0.0, 0.0), 3.0), 0.05, -0.02, 0.1, 16.0, 0.0,
+                                    friction=0.3)
+        for side in (1, -1):
+            world.add_static_box((1.5, side * 0.06, 0.04), (1.5, 0.01, 0.04))
+        world.check_free = world.check_rest = True
+        row = world.add_bottle((0.5, 0, 0), 0.03, 0.1, 0.05, "b", transport="exact")
+        world.step(60)
+        assert world.rest.resting[row]
+        world.set_field_speed(belt, 0.5)
+        assert world.transport.free[row]
+        world.step(30)
+        assert world.transport.free[row] and world.velocities[row, 0] > 0.4
