@@ -220,7 +220,9 @@ class Rest:
         near = self._near(centres, extents, awake, positions, velocities, spins)
         if len(near) == 0:
             return resting[:0]
-        return self.joining(positions[near], self.boxes(near, orientations, velocities, spins), positions)
+        seeds = _seeds(near, positions, orientations, velocities, spins, self.radii, self.half_heights, self.dt,
+                       np.ascontiguousarray(centres), extents)
+        return self._group(seeds, positions) if seeds.any() else resting[:0]
 
     def joining(self, centres, extents, positions) -> np.ndarray:
         """The resting rows (and their groups) whose boxes overlap any of the boxes (centres, extents)."""
@@ -290,3 +292,36 @@ def _within(rows, positions, velocities, spins, radii, half_heights, dt, centres
                 near[i] = True
                 break
     return near
+
+
+@njit(cache=True)
+def _seeds(rows, positions, orientations, velocities, spins, radii, half_heights, dt, centres, extents):
+    """(len(centres),): which resting boxes (centres, extents) the box of any of `rows` (`boxes`,
+    headed one tick) overlaps."""
+    seeds = np.zeros(centres.shape[0], np.bool_)
+    for n in rows:
+        box = np.empty(3)
+        for axis in range(3):
+            box[axis] = extent(orientations[n], radii[n], half_heights[n], velocities[n], spins[n], dt, axis,
+                               SHAPE_MARGIN + BREAKING)
+        for m in range(centres.shape[0]):
+            if (abs(positions[n, 0] - centres[m, 0]) < box[0] + extents[m, 0]
+                    and abs(positions[n, 1] - centres[m, 1]) < box[1] + extents[m, 1]
+                    and abs(positions[n, 2] - centres[m, 2]) < box[2] + extents[m, 2]):
+                seeds[m] = True
+    return seeds
+
+
+@njit(cache=True)
+def extent(q, r, h, v, w, horizon, axis, margin):
+    """`boxes` for one upright body (quaternion q, radius r, half height h) on one axis: Σⱼ |Rᵢⱼ|·lⱼ
+    turned into the world, `margin`, and its way over `horizon` s at velocity v and spin w, both ways."""
+    x, y, z, s = q[0], q[1], q[2], q[3]
+    if axis == 0:
+        a, b, c = s * s + x * x - y * y - z * z, 2.0 * (x * y - s * z), 2.0 * (x * z + s * y)
+    elif axis == 1:
+        a, b, c = 2.0 * (x * y + s * z), s * s - x * x + y * y - z * z, 2.0 * (y * z - s * x)
+    else:
+        a, b, c = 2.0 * (x * z - s * y), 2.0 * (y * z + s * x), s * s - x * x - y * y + z * z
+    turn = math.sqrt((w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * (2.0 * r * r + h * h))
+    return abs(a) * r + abs(b) * r + abs(c) * h + margin + (abs(v[axis]) + turn) * horizon

@@ -48,7 +48,7 @@ from numba import njit
 
 from hub.physics._quiet import quiet_stderr
 from hub.physics.fields import field_at
-from hub.physics.rest import BREAKING, SHAPE_MARGIN, boxes, overlapping
+from hub.physics.rest import SHAPE_MARGIN, boxes, extent, overlapping
 
 with quiet_stderr():
     import pybullet
@@ -189,7 +189,12 @@ class FreeTransport:
         changes by at most n·|v_a − v_b|·dt, however hard the belt pulls: a line of bottles
         setting off from rest together stays a line. One compiled loop (`_touching` below)."""
         b, fields = self.bodies, self.fields
-        play = b.in_play_rows() if among is None else np.union1d(rows, among)
+        if among is None:
+            play = b.in_play_rows()
+        else:
+            pool = np.zeros(len(self.free), bool)
+            pool[rows] = pool[among] = True
+            play = np.flatnonzero(pool)
         touching, bound = _touching(rows, play, float(times), self.dt, positions, orientations, velocities, spins,
                                     b.radii, b.half_heights, self.ahead, self.pull, self.pulls, self.free,
                                     fields.straight_law, fields.regions())
@@ -198,8 +203,9 @@ class FreeTransport:
             # A part's box as the wake rule widens it for one tick, and headed as far again as the
             # farthest look; against each bottle's bound (which holds its box).
             horizon = float(self.ahead[rows].max()) * times * self.dt
-            centres = np.array([p.box()[0] for p in moving.parts])
-            extents = np.array([p.box()[1] + np.abs(p.axis) * abs(p.velocity) * horizon for p in moving.parts])
+            parts = [(p.box(), p) for p in moving.parts]
+            centres = np.array([box[0] for box, _ in parts])
+            extents = np.array([box[1] + np.abs(p.axis) * abs(p.velocity) * horizon for box, p in parts])
             mine = np.repeat(bound[:, None], 3, axis=1)
             touching |= overlapping(positions[rows], mine, centres, extents).any(axis=1)
         return touching
@@ -413,20 +419,14 @@ class FreeTransport:
 
     def advance(self) -> None:
         """After the engine's step: every free bottle one tick on — the velocity change it was
-        handed, then x ← x + v·dt, as the engine integrates — in numpy."""
+        handed, then x ← x + v·dt, as the engine integrates — in one compiled loop."""
         rows = self.rows
         if len(rows) == 0:
             return
-        b, dt = self.bodies, self.dt
-        v = b.velocities[rows]
+        b = self.bodies
         handed, self._handed = self._handed, None
-        if handed is not None and len(handed[0]):
-            on, dvx, dvy = handed
-            at = np.searchsorted(rows, on)
-            v[at, 0] += dvx
-            v[at, 1] += dvy
-        b.velocities[rows] = v
-        b.positions[rows, :2] += v[:, :2] * dt
+        on, dvx, dvy = handed if handed is not None else (rows[:0], np.zeros(0), np.zeros(0))
+        _advance(rows, on, dvx, dvy, b.positions, b.velocities, self.dt)
 
     def _changed(self) -> None:
         self.rows = np.flatnonzero(self.free)
@@ -527,6 +527,20 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
 
 
 @njit(cache=True)
+def _advance(rows, on, dvx, dvy, positions, velocities, dt):
+    """FreeTransport.advance: the velocity changes handed to `on` (a subset of `rows`, both in
+    body order), then every row's x ← x + v·dt."""
+    j = 0
+    for n in rows:
+        if j < on.shape[0] and on[j] == n:
+            velocities[n, 0] += dvx[j]
+            velocities[n, 1] += dvy[j]
+            j += 1
+        positions[n, 0] += velocities[n, 0] * dt
+        positions[n, 1] += velocities[n, 1] * dt
+
+
+@njit(cache=True)
 def _listing(rows, positions, radii, half_heights, pair_row, pair_box, c, h, cos, sin):
     """The (bottle, fixed box) pairs: those of other bottles than `rows` kept, and for each of
     `rows` the boxes its upright footprint is within LIST of (apart in height: not listed)."""
@@ -582,32 +596,23 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
     count = play.shape[0]
     bound = np.empty(count)
     steady = np.empty(count, np.bool_)
-    belt = np.full(count, -1, np.int64)
+    belt = np.full(count, -2, np.int64)   # worked out for a body once a pair needs it (`_belt`)
     tilt = math.cos(TILT)
     farthest = 0.0
     for q in range(count):
         farthest = max(farthest, ahead[play[q]] * times)
-    m = farthest
     for q in range(count):
         n = play[q]
-        # The straight belt with a mass-scaled law it stays on as far as the farthest look goes.
-        x, y, z = positions[n, 0], positions[n, 1], positions[n, 2]
-        now = field_at(x, y, z, *regions)
-        if now >= 0 and straight_law[now]:
-            grow = m * (m + 1.0) / 2.0 * dt
-            there = field_at(x + velocities[n, 0] * m * dt + pulls[n, 0] * grow,
-                             y + velocities[n, 1] * m * dt + pulls[n, 1] * grow, z, *regions)
-            if there == now:
-                belt[q] = now
         k = ahead[n] * times
         r, h = radii[n], half_heights[n]
         size = math.sqrt(2.0 * r * r + h * h)
         v, w = velocities[n], spins[n]
         spin = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-        bound[q] = (size + (SHAPE_MARGIN + BREAKING)
+        bound[q] = (size + SHAPE_MARGIN
                     + (math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + spin * size) * k * dt)
         x, y = orientations[n, 0], orientations[n, 1]
-        steady[q] = free[n] or (1.0 - 2.0 * (x * x + y * y) > tilt and spin < SPIN and abs(v[2]) < RISE)
+        # Upright and not rocking much: its footprint is its base's circle (a bob up and down moves it not at all).
+        steady[q] = free[n] or (1.0 - 2.0 * (x * x + y * y) > tilt and spin < SPIN)
     lo_x, hi_x, lo_y, hi_y = np.inf, -np.inf, np.inf, -np.inf
     for q in range(count):
         lo_x = min(lo_x, positions[play[q], 0])
@@ -636,14 +641,14 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
                     break
                 t += step
                 if _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights,
-                         ahead, pull, belt, bound, steady):
+                         ahead, pull, pulls, belt, farthest, straight_law, regions, bound, steady):
                     touching[i] = True
     return touching, mine
 
 
 @njit(cache=True)
-def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, pull, belt,
-          bound, steady):
+def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, pull, pulls,
+          belt, farthest, straight_law, regions, bound, steady):
     """Whether bodies play[a] and play[o] could touch within the look (FreeTransport._touching)."""
     na, no = play[a], play[o]
     reach = bound[a] + bound[o]
@@ -658,33 +663,39 @@ def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, rad
         closing = math.hypot(velocities[na, 0] - velocities[no, 0], velocities[na, 1] - velocities[no, 1])
         rock = _swing(radii[na], half_heights[na], spins[na]) + _swing(radii[no], half_heights[no], spins[no])
         way = (closing + rock) * n * dt
+        for q in (a, o):
+            if belt[q] == -2:
+                belt[q] = _belt(play[q], farthest, dt, positions, velocities, pulls, straight_law, regions)
         if not (belt[a] >= 0 and belt[a] == belt[o]):
             way += (pull[na] + pull[no]) * n * (n + 1.0) / 2.0 * dt
         return math.hypot(ax, ay) - radii[na] - radii[no] - 2.0 * SHAPE_MARGIN < way
     ka, ko = ahead[na] * times, ahead[no] * times
     for c in range(3):
-        extent = (_extent(orientations[na], radii[na], half_heights[na], velocities[na], spins[na], ka * dt, c)
-                  + _extent(orientations[no], radii[no], half_heights[no], velocities[no], spins[no], ko * dt, c))
-        if abs(positions[na, c] - positions[no, c]) >= extent:
+        # The wake rule's boxes without the contact breaking threshold (a free bottle is in no island
+        # of the engine's: what matters is a contact).
+        reach = (extent(orientations[na], radii[na], half_heights[na], velocities[na], spins[na], ka * dt, c,
+                        SHAPE_MARGIN)
+                 + extent(orientations[no], radii[no], half_heights[no], velocities[no], spins[no], ko * dt, c,
+                          SHAPE_MARGIN))
+        if abs(positions[na, c] - positions[no, c]) >= reach:
             return False
     return True
 
 
 @njit(cache=True)
-def _swing(r, h, w):
-    return math.sqrt((w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * (2.0 * r * r + h * h))
+def _belt(n, m, dt, positions, velocities, pulls, straight_law, regions):
+    """The straight belt with a mass-scaled law body `n` stands on and stays on for `m` ticks at
+    its velocity and pull, or −1."""
+    x, y, z = positions[n, 0], positions[n, 1], positions[n, 2]
+    now = field_at(x, y, z, *regions)
+    if now < 0 or not straight_law[now]:
+        return -1
+    grow = m * (m + 1.0) / 2.0 * dt
+    there = field_at(x + velocities[n, 0] * m * dt + pulls[n, 0] * grow,
+                     y + velocities[n, 1] * m * dt + pulls[n, 1] * grow, z, *regions)
+    return now if there == now else -1
 
 
 @njit(cache=True)
-def _extent(q, r, h, v, w, horizon, axis):
-    """rest.boxes for one body on one axis: Σⱼ |Rᵢⱼ|·lⱼ turned into the world, margins and the
-    breaking threshold, and its way over `horizon` s at its velocity and spin, both ways."""
-    x, y, z, s = q[0], q[1], q[2], q[3]
-    if axis == 0:
-        row = (s * s + x * x - y * y - z * z, 2.0 * (x * y - s * z), 2.0 * (x * z + s * y))
-    elif axis == 1:
-        row = (2.0 * (x * y + s * z), s * s - x * x + y * y - z * z, 2.0 * (y * z - s * x))
-    else:
-        row = (2.0 * (x * z - s * y), 2.0 * (y * z + s * x), s * s - x * x - y * y + z * z)
-    extent = abs(row[0]) * r + abs(row[1]) * r + abs(row[2]) * h + SHAPE_MARGIN + BREAKING
-    return extent + (abs(v[axis]) + _swing(r, h, w)) * horizon
+def _swing(r, h, w):
+    return math.sqrt((w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * (2.0 * r * r + h * h))
