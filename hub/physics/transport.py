@@ -48,7 +48,7 @@ from numba import njit
 
 from hub.physics._quiet import quiet_stderr
 from hub.physics.fields import field_at
-from hub.physics.rest import SHAPE_MARGIN, boxes, extent, overlapping
+from hub.physics.rest import SHAPE_MARGIN, boxes, extent
 
 with quiet_stderr():
     import pybullet
@@ -98,6 +98,7 @@ class FreeTransport:
         self._fixed = None                  # (centres, half extents, cos, sin) of fixed boxes
         self._spheres = (np.zeros((0, 3)), np.zeros(0))
         self._moving = None                 # MovingParts, tested at every look (their boxes move)
+        self._parts_at_rest = None          # their boxes while none moves
         self._probes: dict[int, int] = {}   # body row → collision shape, for `check`
 
     def add(self, allowed: bool, ahead: int = LOOKAHEAD) -> None:
@@ -195,20 +196,24 @@ class FreeTransport:
             pool = np.zeros(len(self.free), bool)
             pool[rows] = pool[among] = True
             play = np.flatnonzero(pool)
-        touching, bound = _touching(rows, play, float(times), self.dt, positions, orientations, velocities, spins,
-                                    b.radii, b.half_heights, self.ahead, self.pull, self.pulls, self.free,
-                                    fields.straight_law, fields.regions())
+        centres, extents = self._part_boxes(float(self.ahead[rows].max()) * times * self.dt)
+        return _touching(rows, play, float(times), self.dt, positions, orientations, velocities, spins, b.radii,
+                         b.half_heights, self.ahead, self.pull, self.pulls, self.free, fields.straight_law,
+                         fields.regions(), centres, extents)
+
+    def _part_boxes(self, horizon: float) -> tuple[np.ndarray, np.ndarray]:
+        """The moving parts' boxes (centres, half extents) as the wake rule widens them for one
+        tick, and headed `horizon` s further; while none moves, the same boxes at every look."""
         moving = self._moving
-        if moving is not None and moving.parts:
-            # A part's box as the wake rule widens it for one tick, and headed as far again as the
-            # farthest look; against each bottle's bound (which holds its box).
-            horizon = float(self.ahead[rows].max()) * times * self.dt
-            parts = [(p.box(), p) for p in moving.parts]
-            centres = np.array([box[0] for box, _ in parts])
-            extents = np.array([box[1] + np.abs(p.axis) * abs(p.velocity) * horizon for box, p in parts])
-            mine = np.repeat(bound[:, None], 3, axis=1)
-            touching |= overlapping(positions[rows], mine, centres, extents).any(axis=1)
-        return touching
+        if moving is None or not moving.parts:
+            return np.zeros((0, 3)), np.zeros((0, 3))
+        if not moving.moving and self._parts_at_rest is not None:
+            return self._parts_at_rest
+        parts = [(p.box(), p) for p in moving.parts]
+        boxes = (np.array([box[0] for box, _ in parts], float),
+                 np.array([box[1] + np.abs(p.axis) * abs(p.velocity) * horizon for box, p in parts], float))
+        self._parts_at_rest = None if moving.moving else boxes
+        return boxes
 
     def _on_belt(self, rows, now, times: int, positions, velocities) -> tuple[np.ndarray, np.ndarray]:
         """(ok, still), each (len(rows),): riding a belt now (`now`: the field under each) and,
@@ -588,9 +593,9 @@ def _box_distance(x, y, hx, hy):
 
 @njit(cache=True)
 def _touching(rows, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, pull,
-              pulls, free, straight_law, regions):
-    """FreeTransport._touching between bodies: (touching per row, each row's bound). `play` is
-    sorted and holds `rows`; `straight_law` per field: straight, its law scaled by the mass;
+              pulls, free, straight_law, regions, part_centres, part_extents):
+    """FreeTransport._touching: whether each of `rows` could touch a body of `play` (sorted, holds
+    `rows`) or a moving part's box (part_centres, part_extents); `straight_law` per field: straight, its law scaled by the mass;
     `regions`: ForceFields.regions. Pairs by their bounds (rest.bounds), found along
     the plant's longer axis from each row outwards, then as FreeTransport._touching says."""
     count = play.shape[0]
@@ -629,10 +634,14 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
         rank[order[q]] = q
     widest = bound.max() if count else 0.0
     touching = np.zeros(rows.shape[0], np.bool_)
-    mine = np.empty(rows.shape[0])
     for i in range(rows.shape[0]):
         a = np.searchsorted(play, rows[i])
-        mine[i] = bound[a]
+        n = rows[i]
+        for m in range(part_centres.shape[0]):   # a moving part's box against the bound (which holds the box)
+            if (abs(positions[n, 0] - part_centres[m, 0]) < bound[a] + part_extents[m, 0]
+                    and abs(positions[n, 1] - part_centres[m, 1]) < bound[a] + part_extents[m, 1]
+                    and abs(positions[n, 2] - part_centres[m, 2]) < bound[a] + part_extents[m, 2]):
+                touching[i] = True
         for step in (1, -1):
             t = rank[a] + step
             while 0 <= t < count and not touching[i]:
@@ -643,7 +652,7 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
                 if _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights,
                          ahead, pull, pulls, belt, farthest, straight_law, regions, bound, steady):
                     touching[i] = True
-    return touching, mine
+    return touching
 
 
 @njit(cache=True)

@@ -74,6 +74,17 @@ class VolumeTriggers:
         Runs at every tick: the test is one compiled loop over (triggers, bodies) (`_overlap`)."""
         if len(self) == 0:
             return False
+        if moved is not None and not self.shifted and self._inside.shape == (len(self), len(positions)):
+            # The common tick: only the bodies that moved, compared and latched in one compiled loop.
+            b = self.boxes
+            changes = _moved(self._inside, self._stayed, np.asarray(moved, np.int64), positions, radii, half_heights,
+                             b.centers, b.half_extents, b.cos, b.sin)
+            if len(changes) == 0:
+                return False
+            self._occupants = None
+            for t, n, entered in changes.tolist():
+                (self.latches[t].entered if entered else self.latches[t].left).append((tick, n))
+            return True
         if moved is not None and self._inside.shape == (len(self), len(positions)):
             inside = self._inside.copy()
             inside[:, moved] = self._test(positions[moved], radii[moved], half_heights[moved])
@@ -157,3 +168,35 @@ def _overlap(positions, radii, half_heights, boxes, centers, half_extents, cos, 
             out[t, n] = (gx * gx + gy * gy <= radii[n] * radii[n]
                          and abs(positions[n, 2] - cz) <= hz + half_heights[n])
     return out
+
+
+@njit(cache=True)
+def _moved(inside, stayed, moved, positions, radii, half_heights, centers, half_extents, cos, sin):
+    """One tick's occupancy in place: each trigger against the `moved` bodies (the others keep
+    theirs), then whether anything is inside it now (`stayed`). The changes, (trigger, body,
+    entered) each, trigger by trigger and within one the bodies that entered in body order, then
+    those that left."""
+    changes = []
+    for t in range(inside.shape[0]):
+        cx, cy, cz = centers[t, 0], centers[t, 1], centers[t, 2]
+        hx, hy, hz = half_extents[t, 0], half_extents[t, 1], half_extents[t, 2]
+        c, s = cos[t], sin[t]
+        left = []
+        for n in moved:
+            dx, dy = positions[n, 0] - cx, positions[n, 1] - cy
+            gx = max(abs(c * dx + s * dy) - hx, 0.0)
+            gy = max(abs(c * dy - s * dx) - hy, 0.0)
+            now = gx * gx + gy * gy <= radii[n] * radii[n] and abs(positions[n, 2] - cz) <= hz + half_heights[n]
+            if now != inside[t, n]:
+                inside[t, n] = now
+                if now:
+                    changes.append((t, n, 1))
+                else:
+                    left.append((t, n, 0))
+        for change in left:
+            changes.append(change)
+        for n in range(inside.shape[1]):
+            if inside[t, n]:
+                stayed[t] = True
+                break
+    return np.array(changes, np.int64).reshape(-1, 3) if changes else np.zeros((0, 3), np.int64)
