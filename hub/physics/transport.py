@@ -1,4 +1,4 @@
-"""Free transport: a bottle riding a belt that nothing can touch leaves the engine and follows its belt's law in numpy.
+"""Free transport: a bottle riding a belt that nothing can touch leaves the engine and follows its belt's law in the hub.
 
 A bottle carried by a belt, clear of every other body, rail, gate and belt end, costs the
 engine its contacts with the floor and the hub two state reads and a force per tick, and all
@@ -11,33 +11,44 @@ Euler). On a frictionless floor nothing else acts on it horizontally, so a free 
 the engine would move it without contacts, to rounding; its height, orientation and the sink
 it had stay as they were when it left, its vertical velocity and spin are zero.
 
-In the engine a free bottle is out of play as a parked one is (parking.py): collision off, asleep,
-its pose there stale. It re-enters — its exact pose and velocity put back, collision on, awake —
-before the tick at which anything could touch it. "Anything" by three tests, each looking
-`ahead` ticks forward (the bottle's `lookahead`, default 4) and taken every `ahead − 1` ticks —
-at once after a bottle was put down, while a moving part is under way and after a belt changed
-its speed:
+In the engine a free bottle is out of play as a parked or resting one is (parking.py, rest.py):
+collision off, asleep, its pose there stale. It re-enters — its exact pose and velocity put
+back, collision on, awake — before the tick at which anything could touch it. "Anything" by
+three tests, each looking a number of ticks forward (the bottle's `lookahead`, default 4):
 
 - bodies: every other body in play (awake, resting, free, just put down). Two steady bottles
-  (free, or upright and steady in the engine) by their footprints — the gap between them against
-  what their relative velocity, their rocking and the belt's pull can close — so that a line of
-  bottles 2 cm apart rides free; any other pair by the wake rule's boxes (rest.py: margins, the
-  contact breaking threshold, and where each is headed), each headed `ahead` ticks instead of
-  one; a moving part's box likewise;
+  (free, or upright and hardly rocking in the engine) by their footprints — the gap between
+  them against what their relative velocity, their rocking and the belt's pull can close; two
+  on one straight belt whose law scales with the mass, both staying on it, by their relative
+  velocity and rocking alone (that law never lets two velocities part) — so that a line of
+  bottles 2 cm apart rides free, and sets off free together; any other pair by the wake rule's
+  boxes without its contact breaking threshold (a free bottle is in no island), each headed as
+  far; a moving part's box likewise;
 - fixed geometry: rails and walls, gates and blades whether solid or not, and the spheres robot
-  arms reach: the distance of its way ahead (a segment at its velocity) from each box listed
-  within LIST of it, against its radius, FIXED_MARGIN and what the belt's pull may add;
+  arms reach: the distance of its way ahead — at its velocity, and the belt's pull along its own
+  direction, so that a bottle setting off between rails is pulled along them — from each box
+  listed within LIST of it, against its radius and FIXED_MARGIN;
 - the belt: the point it is headed to lies on a belt at the same height (a hand-over between
   chained belts is crossed free: the field under it is looked up at every tick, half-open as
-  the engine-driven bottle's is), and it is not coming to a stop on a still belt (there it
-  re-enters, to rest).
+  the engine-driven bottle's is), and it is not coming to a stop on a still belt: there it rests
+  (rest.py) at once if nothing is near, without the engine, or else re-enters.
 
-A bottle leaves only when it rides a belt upright and steady (tilt under 1°, spin under 2.5
-rad/s, vertical speed under 2 cm/s, its base within 5 mm of the surface) and passes the same
-tests `2·ahead` ticks forward, so that one at the edge does not go in and out every tick.
-Bottles made with `transport: engine`, the paper's two-body model and hull bottles stay in the
-engine. `check` (PhysicsWorld.check_free, tests) asks the engine itself at every tick whether
-a free bottle, at its pose, touches anything but the floor.
+A look at the state of a tick holds for the ticks it looked ahead. Looks are taken every
+`lookahead − 1` ticks; a bottle is looked at whole, LONG look-aheads forward (or one where that
+is too far), only when its last whole look runs out — what it was looked at against moves by
+laws the look bounds — and against the bodies awake in the engine, which contacts may throw, at
+every look. Every free bottle is looked at whole at once after a bottle was put down, while a
+moving part is under way and after a belt changed its speed.
+
+A bottle leaves the engine when it rides a belt upright and steady (tilt under 1°, spin under
+2.5 rad/s, vertical speed under 2 cm/s, its base within 5 mm of the surface) and passes the same
+tests `2·lookahead` ticks forward, so that one at the edge does not go in and out every tick
+(looked for every EVERY ticks); and a resting bottle rides off free straight from rest when its
+belt starts, if it passes them then. Bottles made with `transport: engine`, the paper's two-body
+model and hull bottles stay in the engine. The tests run at every look for dozens of bottles,
+so they are compiled loops (numba), not numpy calls. `check` (PhysicsWorld.check_free, tests)
+asks the engine itself at every tick whether a free bottle, at its pose, touches anything but
+the floor.
 """
 from __future__ import annotations
 

@@ -43,19 +43,21 @@ class PhysicsWorld:
     | `engine` | engine.py | the pybullet client, its set-up, static boxes and the merged floors |
     | `bodies` | bodies.py | the body table: every bottle's properties and state arrays, the rows read per tick |
     | `bottles` | bottles.py | bottles at their level of detail, and the belts' forces where each is gripped |
-    | `fields`, `triggers` | fields.py, triggers.py | belt regions and volume triggers (numpy only) |
+    | `fields`, `triggers` | fields.py, triggers.py | belt regions and volume triggers (numpy and compiled loops, no engine call) |
     | `parts` | parts.py | switchable parts (blades, gates) |
     | `moving` | moving.py | moving kinematic parts (a pusher's plate) |
     | `parking` | parking.py | bodies out of play, off stage |
     | `robots` | arms.py, robot.py | robot arms, gripped bodies and the triggers on their tools |
-    | `rest`, `sleep` | rest.py, sleep.py | bodies at rest: the rule (numpy) and the engine's side |
+    | `rest`, `sleep` | rest.py, sleep.py | bodies at rest: the rule (numpy and compiled loops) and the engine's side |
     | `transport` | transport.py | bottles in free transport, moved by their belt's law outside the engine |
     | `watch` | watch.py, placement.py | a run gone wrong: bodies too fast, non-finite or out of the box; overlaps at load |
     | `scene` | scene.py | what was built and by which object, and the moving state, for a view |
 
     Each tick reads the state of every body in play once, except those at rest (asleep in the
-    engine, their state stands); force fields and triggers work on those arrays with numpy,
-    which is far cheaper than one pybullet query per body and volume. Bodies are created before
+    engine, their state stands) and those in free transport (the hub moves them); force fields,
+    triggers, the wake rule and free transport's looks work on those arrays, in compiled loops
+    (numba) where they go body by body at every tick: far cheaper than one pybullet query per
+    body and volume, and than the dozens of small numpy calls the same tests were. Bodies are created before
     the first step and never reset inside the loop, because pybullet is deterministic only for
     an identical sequence of calls.
 
