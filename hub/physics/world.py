@@ -199,9 +199,10 @@ class PhysicsWorld:
 
     def set_field_speed(self, field: int, speed: float) -> None:
         """A belt's speed; bodies resting on it wake when it changes — those that may ride free
-        and nothing can touch ride off free instead (transport.py). The same speed again (every
-        belt sets its speed at every communication point) changes nothing and costs nothing: the
-        watch's bound follows the speeds a belt changes to (it starts from those at load)."""
+        and nothing can touch ride off free instead (transport.py). The same speed again changes
+        nothing and costs nothing (a belt sets its field's speed only when it changes, but any
+        caller may): the watch's bound follows the speeds a belt changes to (it starts from those
+        at load)."""
         if speed == self.fields.speeds[field]:
             return
         self.watch.belt_speed(speed)
