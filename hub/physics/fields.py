@@ -101,7 +101,9 @@ class ForceFields:
         self.limits = np.append(self.limits, float(limit))
         self.surfaces = np.append(self.surfaces, float(line.start.z))
         self.limited = bool(np.isfinite(self.limits).any())
-        self.straight_law = ~self.lines.is_arc & self.per_mass   # two bottles on it follow one law (transport.py)
+        # Two bottles on it follow one law that never lets their velocities part (transport.py):
+        # not on an arc, nor with the gain per body, nor with the explicit law (unstable past k·dt = 2).
+        self.straight_law = ~self.lines.is_arc & self.per_mass & (not self.explicit)
         return index
 
     def set_speed(self, field: int, speed: float) -> None:

@@ -35,8 +35,11 @@ three tests, each looking a number of ticks forward (the bottle's `lookahead`, d
 
 A look at the state of a tick holds for the ticks it looked ahead. Looks are taken every
 `lookahead − 1` ticks; a bottle is looked at whole, LONG look-aheads forward (or one where that
-is too far), only when its last whole look runs out — what it was looked at against moves by
-laws the look bounds — and against the bodies awake in the engine, which contacts may throw, at
+is too far, or where its way crosses onto another belt), only when its last whole look runs out
+— what it was looked at against moves by laws the look bounds: fixed geometry and resting
+bodies stand, free bottles follow their belts, and each body's pull is its belt's law now (not
+the last tick's: one that crossed onto another belt is pulled by that one), bounded by the law
+where its way ends — and against the bodies awake in the engine, which contacts may throw, at
 every look. Every free bottle is looked at whole at once after a bottle was put down, while a
 moving part is under way and after a belt changed its speed.
 
@@ -207,10 +210,35 @@ class FreeTransport:
             pool = np.zeros(len(self.free), bool)
             pool[rows] = pool[among] = True
             play = np.flatnonzero(pool)
-        centres, extents = self._part_boxes(float(self.ahead[rows].max()) * times * self.dt)
+        horizon = float(self.ahead[rows].max()) * times * self.dt
+        centres, extents = self._part_boxes(horizon)
+        # A body whose way ends on another belt is pulled by that belt's law there: its pull is
+        # bounded by the larger of now and there (for a pair that is not on one belt all the way).
+        ends = positions[play] + velocities[play] * horizon
+        there = fields.which(ends)
+        bound = self.pull.copy()
+        on = there >= 0
+        if on.any():
+            dvx, dvy = fields.changes_at(there[on], ends[on], velocities[play[on]], b.masses[play[on]])
+            bound[play[on]] = np.maximum(bound[play[on]], np.hypot(dvx, dvy))
         return _touching(rows, play, float(times), self.dt, positions, orientations, velocities, spins, b.radii,
-                         b.half_heights, self.ahead, self.pull, self.pulls, self.free, fields.straight_law,
+                         b.half_heights, self.ahead, bound, self.pulls, self.free, fields.straight_law,
                          fields.regions(), centres, extents)
+
+    def _pull_now(self, rows, positions, velocities) -> None:
+        """The pull each of `rows` gets from the belt under it at its velocity now — what the next
+        tick applies — in place of the last tick's, which is stale once a bottle crossed onto
+        another belt."""
+        if len(rows) == 0:
+            return
+        field = self.fields.which(positions[rows])
+        on = field >= 0
+        self.pull[rows], self.pulls[rows] = 0.0, 0.0
+        if on.any():
+            n = rows[on]
+            dvx, dvy = self.fields.changes_at(field[on], positions[n], velocities[n], self.bodies.masses[n])
+            self.pull[n] = np.hypot(dvx, dvy)
+            self.pulls[n, 0], self.pulls[n, 1] = dvx, dvy
 
     def _part_boxes(self, horizon: float) -> tuple[np.ndarray, np.ndarray]:
         """The moving parts' boxes (centres, half extents) as the wake rule widens them for one
@@ -226,12 +254,18 @@ class FreeTransport:
         self._parts_at_rest = None if moving.moving else boxes
         return boxes
 
-    def _on_belt(self, rows, now, times: int, positions, velocities) -> tuple[np.ndarray, np.ndarray]:
-        """(ok, still), each (len(rows),): riding a belt now (`now`: the field under each) and,
-        `times` × its look-ahead on, one at the same height, not coming to a stop on a still
-        belt (ok); on a belt, coming to a stop on a still one (still)."""
+    def _on_belt(self, rows, now, times: int, positions, velocities) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(ok, still, stays), each (len(rows),): riding a belt now (`now`: the field under each)
+        and, `times` × its look-ahead on, one at the same height, not coming to a stop on a still
+        belt (ok); on a belt, coming to a stop on a still one (still); on the same belt all the
+        way, at its velocity and with the belt's pull (stays: its law, and so its pull, does not
+        change on the way — one crossing onto a slower belt is pulled harder there)."""
         fields = self.fields
-        there = fields.which(positions[rows] + velocities[rows] * (self.ahead[rows, None] * times * self.dt))
+        n = self.ahead[rows, None] * times
+        way = positions[rows] + velocities[rows] * (n * self.dt)
+        there = fields.which(way)
+        way[:, :2] += self.pulls[rows] * (n * (n + 1) / 2.0 * self.dt)
+        stays = (now >= 0) & (there == now) & (fields.which(way) == now)
         ok = (now >= 0) & (there >= 0)
         ok[ok] = fields.surfaces[now[ok]] == fields.surfaces[there[ok]]
         still = np.zeros(len(rows), bool)
@@ -239,7 +273,7 @@ class FreeTransport:
             v = velocities[rows]
             still = ok & (fields.speeds[np.maximum(now, 0)] == 0.0) & ((v[:, 0] ** 2 + v[:, 1] ** 2) < STILL * STILL)
             ok &= ~still
-        return ok, still
+        return ok, still, stays
 
     def _fields(self, rows, read_rows, under, positions) -> np.ndarray:
         """The field under each of `rows` as the last read found it (`under`, per `read_rows`),
@@ -256,10 +290,12 @@ class FreeTransport:
         A look at the state of `tick` holds for the ticks it looked ahead, so looks are taken
         once every look-ahead less one tick, and a bottle is looked at whole only when the last
         whole look at it runs out (`clear`): then LONG × its look-ahead forward, or its look-ahead
-        where that is too far. Everything it was looked at against moves by a law that look
-        bounds — fixed geometry and resting bodies stand, free bottles follow their belts, a
-        belt's pull does not grow — except the bodies awake in the engine, which contacts may
-        throw: against those (`awake`) every free bottle is looked at each time. Every free
+        where that is too far or its way crosses onto another belt. Everything it was looked at
+        against moves by a law that look bounds — fixed geometry and resting bodies stand, free
+        bottles follow their belts, each body's pull is taken afresh from its belt's law
+        (`_pull_now`) and bounded by the law where its way ends — except the bodies awake in the
+        engine, which contacts may throw: against those (`awake`) every free bottle is looked at
+        each time. Every free
         bottle is looked at whole at once after a body was put down (`placed`), while a moving
         part is under way (`moving`) and after a belt changed its speed."""
         rows = self.rows
@@ -274,6 +310,7 @@ class FreeTransport:
             for n, centre in placed.items():
                 positions[n] = centre
         state = positions, b.orientations, b.velocities, b.angular_velocities
+        self._pull_now(b.in_play_rows() if b.moved_rows is None else b.moved_rows, positions, b.velocities)
         whole = placed or moving or self._everything
         self._everything = False
         due = np.ones(len(rows), bool) if whole else self.clear[rows] < tick + ahead
@@ -286,13 +323,13 @@ class FreeTransport:
             look = rows[due]
             now = self._fields(look, b.moved_rows, b.moved_under, positions)
             # LONG looks ahead first; what that finds near is looked at one look-ahead forward.
-            ok, still = self._on_belt(look, now, LONG, positions, b.velocities)
+            ok, still, stays = self._on_belt(look, now, LONG, positions, b.velocities)
             near = self._touching(look, LONG, *state) | self._fixed_hit(look, LONG, positions, b.velocities)
-            far = ok & ~near
+            far = ok & stays & ~near
             self.clear[look[far]] = tick + LONG * self.ahead[look[far]]
             short = ~far
             if short.any():
-                ok1, still1 = self._on_belt(look[short], now[short], 1, positions, b.velocities)
+                ok1, still1, _ = self._on_belt(look[short], now[short], 1, positions, b.velocities)
                 near1 = (self._touching(look[short], 1, *state)
                          | self._fixed_hit(look[short], 1, positions, b.velocities))
                 ok[short], still[short], near[short] = ok1, still1, near1
@@ -384,6 +421,7 @@ class FreeTransport:
             rows = rows[~np.isin(rows, held)]
         if len(rows) == 0:
             return
+        self._pull_now(b.in_play_rows() if b.moved_rows is None else b.moved_rows, b.positions, b.velocities)
         go, near = self._leaving(rows, b.live_rows, b.under)
         self.next_try[near] = tick + RETRY
         if len(go) == 0:
@@ -423,10 +461,21 @@ class FreeTransport:
         return rows[~near], rows[near]
 
     # --- the tick itself --------------------------------------------------------------------
-    def speed_changed(self) -> None:
-        """A belt's speed changed: the free bottles are looked at whole before the next tick."""
+    def speed_changed(self, field: int) -> None:
+        """A belt's speed changed (`field`, at its new speed): the free bottles are looked at
+        whole before the next tick, and every moving bottle on it with the pull it gets there now
+        (the last tick's, which the looks would otherwise take, was at the old speed)."""
         self.due = 0
         self._everything = True
+        b = self.bodies
+        if not b.started or len(self.free) == 0:
+            return
+        rows = b.in_play_rows() if b.moved_rows is None else b.moved_rows
+        on = rows[self.fields.which(b.positions[rows]) == field]
+        if len(on):
+            dvx, dvy = self.fields.changes_at(np.full(len(on), field), b.positions[on], b.velocities[on], b.masses[on])
+            self.pull[on] = np.hypot(dvx, dvy)
+            self.pulls[on, 0], self.pulls[on, 1] = dvx, dvy
 
     def hand(self, rows, dvx, dvy) -> None:
         """Before the engine's step: the velocity changes the belts' law gives the free `rows` on
@@ -710,10 +759,15 @@ def _belt(n, m, dt, positions, velocities, pulls, straight_law, regions):
     now = field_at(x, y, z, *regions)
     if now < 0 or not straight_law[now]:
         return -1
+    # Its way lies in the parallelogram of its velocity's way and the pull's: all four corners on
+    # the belt (a band, convex) keep all of it there.
     grow = m * (m + 1.0) / 2.0 * dt
-    there = field_at(x + velocities[n, 0] * m * dt + pulls[n, 0] * grow,
-                     y + velocities[n, 1] * m * dt + pulls[n, 1] * grow, z, *regions)
-    return now if there == now else -1
+    wx, wy = velocities[n, 0] * m * dt, velocities[n, 1] * m * dt
+    gx, gy = pulls[n, 0] * grow, pulls[n, 1] * grow
+    for cx, cy in ((wx, wy), (gx, gy), (wx + gx, wy + gy)):
+        if field_at(x + cx, y + cy, z, *regions) != now:
+            return -1
+    return now
 
 
 @njit(cache=True)

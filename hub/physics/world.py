@@ -206,8 +206,8 @@ class PhysicsWorld:
         if speed == self.fields.speeds[field]:
             return
         self.watch.belt_speed(speed)
-        self.transport.speed_changed()
         self.fields.set_speed(field, speed)
+        self.transport.speed_changed(field)
         if self.rest.resting.any():
             rows = self.rest.on_field(field, self.bodies.positions)
             if self.transport.enabled and len(rows):

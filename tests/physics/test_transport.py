@@ -184,3 +184,39 @@ def test_a_bottle_setting_off_between_rails_is_pulled_along_them_not_into_them()
         assert world.transport.free[row]
         world.step(30)
         assert world.transport.free[row] and world.velocities[row, 0] > 0.4
+
+
+@pytest.mark.parametrize("slow", [0.0, 0.1])
+@pytest.mark.parametrize("gap, lead", [(0.01, 0.3), (0.01, 0.33), (0.02, 0.3)])
+def test_two_free_bottles_where_the_first_crosses_onto_a_slower_belt_come_back_before_they_touch(slow, gap, lead):
+    # The first is pulled harder once over the hand-over: a look taken before must not hold
+    # past it (found by review: both were still free when they touched, with looks that took
+    # the pull each had on the fast belt).
+    with belts_world(0.5, slow) as world:
+        world.check_rest = False
+        first = world.add_bottle((lead, 0, 0), 0.03, 0.1, 0.05, "lead", transport="exact")
+        second = world.add_bottle((lead - 0.06 - gap, 0, 0), 0.03, 0.1, 0.05, "back", transport="exact")
+        both_free = False
+        for _ in range(400):
+            world.step(1)                              # check_free: the engine's word at every tick
+            both_free |= bool(world.transport.free[[first, second]].all())
+        assert both_free and world.transport.left >= 1
+
+
+@pytest.mark.parametrize("distance", [0.014, 0.02, 0.028])
+def test_a_free_bottle_comes_back_before_a_wall_when_its_belt_speeds_up(distance):
+    # At the speed change the bottle's pull is the one at the new speed (found by review: it
+    # was the last tick's, at the old speed, and a look four look-aheads forward let it hit the wall).
+    with PhysicsWorld(150) as world:
+        world.check_free = world.check_rest = True
+        world.add_support(0.0, (0.0, -0.07, 3.0, 0.07))
+        belt = world.add_belt_field(Straight(Pose(0.0, 0.0, 0.0, 0.0), 3.0), 0.05, -0.02, 0.1, 16.0, 0.1)
+        world.add_static_box((1.01, 0.0, 0.04), (0.01, 0.07, 0.04))   # a wall across the belt, its face at x = 1
+        row = world.add_bottle((0.7, 0, 0), 0.03, 0.1, 0.05, "b", transport="exact")
+        world.step(1)
+        while world.positions[row, 0] + 0.03 < 1.0 - distance:
+            world.step(1)
+        assert world.transport.free[row]
+        world.set_field_speed(belt, 0.5)
+        world.step(60)
+        assert not world.transport.free[row] and world.positions[row, 0] + 0.03 <= 1.0 + 1e-3
