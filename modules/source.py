@@ -78,6 +78,7 @@ class Store(Component):
         self.next = 0
         self.pending = False
         self.out: int | None = None       # index released at the last actuation, reported next sense
+        self.blocker: int | None = None   # the body that kept the spot at the last look: asked first
 
     def sense(self, tick):
         if self.out is not None:
@@ -101,17 +102,30 @@ class Store(Component):
 
     def spot_clear(self) -> bool:
         w = self.world
-        positions = w.positions
+        positions, half_heights, level = w.positions, w.half_heights, self.spot[2]
+        # A release waits for its spot at nearly every point (bottling plant: 483 of 490 looks
+        # found it taken), mostly behind the same bottle: that one asked first answers without
+        # numpy over every body. Near only with a margin of 1e-9 of the squared distance, far
+        # beyond any rounding of numpy's einsum, so the answer is the one the full look gives.
+        n = self.blocker
+        if n is not None:
+            dx = float(positions[n, 0]) - float(self._where[0])
+            dy = float(positions[n, 1]) - float(self._where[1])
+            half = float(half_heights[n])
+            if (dx * dx + dy * dy < self.clear ** 2 * (1.0 - 1e-9)
+                    and abs(float(positions[n, 2]) - (level + half)) < 2 * half):
+                return False
         d = positions[:, :2] - self._where
         near = np.flatnonzero(np.einsum("ij,ij->i", d, d) < self.clear ** 2).tolist()
         # Only bodies at the spot's level count: a bottle carried high above it is no obstacle.
-        # A release waiting for its spot asks at every point, and only a few bodies are near it:
-        # judged one by one in floats, the same arithmetic as numpy's, without its cost per call.
-        level, half_heights = self.spot[2], w.half_heights
+        # Only a few bodies are near the spot: judged one by one in floats, the same arithmetic
+        # as numpy's, without its cost per call.
         for n in near:
             half = float(half_heights[n])
             if abs(float(positions[n, 2]) - (level + half)) < 2 * half:
+                self.blocker = n
                 return False
+        self.blocker = None
         return True
 
 
