@@ -190,9 +190,16 @@ class TwoPositions(Component):
         active[solid] = active[passable] = active[blocked] = True
 
     def actuate(self):
-        b, tick = self.blocker, self.blocker.world.tick
-        updated = self.signals.updated
+        b, updated = self.blocker, self.signals.updated
         level, to_passable, to_solid = self._commands
+        if not (updated[level] or updated[to_passable] or updated[to_solid]):
+            # No command, no move and no open waiting for the interlock: Blocker.actuate has
+            # nothing to do (the case at most points for the bottling plant's 9 parts).
+            if b.arrive is None and not b.held_open:
+                return
+            b.actuate(b.world.tick)
+            return
+        tick = b.world.tick
         if updated[level]:
             b.command(tick, self.signals.values[level])
         if updated[to_passable]:
