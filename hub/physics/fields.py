@@ -161,11 +161,14 @@ class ForceFields:
 
         One compiled loop over the bodies (`_changes`): this runs at every tick for every bottle
         on a belt, where numpy's per-call overhead, not the arithmetic, was the cost."""
-        lines = self.lines
         return _changes(np.asarray(f, np.int64), np.ascontiguousarray(points, float),
-                        np.ascontiguousarray(velocities, float), np.ascontiguousarray(masses, float),
-                        self.dt, self.explicit, self.rates, self.per_mass, self.speeds, self.surface, self.limits,
-                        lines.is_arc, lines.origin, lines.cos, lines.sin, lines.turn, lines.radius)
+                        np.ascontiguousarray(velocities, float), np.ascontiguousarray(masses, float), *self.laws())
+
+    def laws(self) -> tuple:
+        """The belts' laws as compiled loops take them (`law_at`)."""
+        lines = self.lines
+        return (self.dt, self.explicit, self.rates, self.per_mass, self.speeds, self.surface, self.limits,
+                lines.is_arc, lines.origin, lines.cos, lines.sin, lines.turn, lines.radius)
 
     def _keep(self, rate: np.ndarray) -> np.ndarray:
         """What is left of a velocity error after one tick at `rate` (1/s): e^(−k·dt) exactly, or
@@ -219,8 +222,10 @@ def field_at(x, y, z, origin, cos, sin, is_arc, turn, radius, angle0, length, ha
             continue
         dx, dy = x - origin[k, 0], y - origin[k, 1]
         if is_arc[k]:
-            along = ((turn[k] * (math.atan2(dy, dx) - angle0[k])) % TAU) * radius[k]
             across = turn[k] * (radius[k] - math.hypot(dx, dy))
+            if abs(across) > half_width[k]:
+                continue          # off the ring: no angle needed
+            along = ((turn[k] * (math.atan2(dy, dx) - angle0[k])) % TAU) * radius[k]
         else:
             along = cos[k] * dx + sin[k] * dy
             across = cos[k] * dy - sin[k] * dx
@@ -237,36 +242,44 @@ def _changes(f, points, velocities, masses, dt, explicit, rates, per_mass, speed
     n = f.shape[0]
     dvx, dvy = np.empty(n), np.empty(n)
     for i in range(n):
-        k = f[i]
-        vx, vy = velocities[i, 0], velocities[i, 1]
-        rate = rates[k] if per_mass[k] else rates[k] / masses[i]
-        keep = 1.0 - rate * dt if explicit else math.exp(-rate * dt)
-        speed = speeds[k]
-        tx, ty = cos[k], sin[k]                 # direction of travel (the tangent on a curve)
-        rx = ry = 0.0
-        if is_arc[k]:
-            rx, ry = points[i, 0] - origin[k, 0], points[i, 1] - origin[k, 1]
-            rho = max(math.hypot(rx, ry), 1e-12)
-            tx, ty = -turn[k] * ry / rho, turn[k] * rx / rho
-        if not surface[k]:
-            # along: only the component on the belt direction relaxes.
-            u = (speed - (vx * tx + vy * ty)) * (1.0 - keep)
-            x, y = u * tx, u * ty
-        elif not is_arc[k]:
-            # A straight belt's surface moves at speed·d: the relative velocity decays.
-            gone = 1.0 - keep
-            x, y = (speed * tx - vx) * gone, (speed * ty - vy) * gone
-        else:
-            # In the surface's frame: rotate by ω·dt about the centre; w carries a surface point
-            # where the surface moves it in one tick.
-            angle = turn[k] * speed / radius[k] * dt
-            c, s = math.cos(angle), math.sin(angle)
-            wx, wy = (c * rx - s * ry - rx) / dt, (s * rx + c * ry - ry) / dt
-            qx, qy = (c * vx - s * vy - wx) * keep, (s * vx + c * vy - wy) * keep
-            x, y = wx + c * qx - s * qy - vx, wy + s * qx + c * qy - vy
-        if limits[k] < np.inf:
-            # Friction gives at most μ·g: a bottle held back slides on the belt.
-            scale = min(1.0, limits[k] * dt / max(math.hypot(x, y), 1e-300))
-            x, y = x * scale, y * scale
-        dvx[i], dvy[i] = x, y
+        dvx[i], dvy[i] = law_at(f[i], points[i, 0], points[i, 1], velocities[i, 0], velocities[i, 1], masses[i],
+                                dt, explicit, rates, per_mass, speeds, surface, limits, is_arc, origin, cos, sin, turn,
+                                radius)
     return dvx, dvy
+
+
+@njit(cache=True)
+def law_at(k, px, py, vx, vy, mass, dt, explicit, rates, per_mass, speeds, surface, limits, is_arc, origin, cos, sin,
+           turn, radius):
+    """The velocity change (dvx, dvy) field `k`'s law gives a body at (px, py) moving at (vx, vy)
+    in one tick (ForceFields.changes_at); the arrays after `mass`: `ForceFields.laws`."""
+    rate = rates[k] if per_mass[k] else rates[k] / mass
+    keep = 1.0 - rate * dt if explicit else math.exp(-rate * dt)
+    speed = speeds[k]
+    tx, ty = cos[k], sin[k]                 # direction of travel (the tangent on a curve)
+    rx = ry = 0.0
+    if is_arc[k]:
+        rx, ry = px - origin[k, 0], py - origin[k, 1]
+        rho = max(math.hypot(rx, ry), 1e-12)
+        tx, ty = -turn[k] * ry / rho, turn[k] * rx / rho
+    if not surface[k]:
+        # along: only the component on the belt direction relaxes.
+        u = (speed - (vx * tx + vy * ty)) * (1.0 - keep)
+        x, y = u * tx, u * ty
+    elif not is_arc[k]:
+        # A straight belt's surface moves at speed·d: the relative velocity decays.
+        gone = 1.0 - keep
+        x, y = (speed * tx - vx) * gone, (speed * ty - vy) * gone
+    else:
+        # In the surface's frame: rotate by ω·dt about the centre; w carries a surface point
+        # where the surface moves it in one tick.
+        angle = turn[k] * speed / radius[k] * dt
+        c, s = math.cos(angle), math.sin(angle)
+        wx, wy = (c * rx - s * ry - rx) / dt, (s * rx + c * ry - ry) / dt
+        qx, qy = (c * vx - s * vy - wx) * keep, (s * vx + c * vy - wy) * keep
+        x, y = wx + c * qx - s * qy - vx, wy + s * qx + c * qy - vy
+    if limits[k] < np.inf:
+        # Friction gives at most μ·g: a bottle held back slides on the belt.
+        scale = min(1.0, limits[k] * dt / max(math.hypot(x, y), 1e-300))
+        x, y = x * scale, y * scale
+    return x, y

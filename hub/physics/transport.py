@@ -61,7 +61,7 @@ import numpy as np
 from numba import njit
 
 from hub.physics._quiet import quiet_stderr
-from hub.physics.fields import field_at
+from hub.physics.fields import field_at, law_at
 from hub.physics.rest import SHAPE_MARGIN, boxes, extent
 
 with quiet_stderr():
@@ -100,6 +100,7 @@ class FreeTransport:
         self.rows = np.zeros(0, int)        # the free rows, in body order
         self.pull = np.zeros(0)             # per body: the velocity change the belt gave it at the last tick, m/s
         self.pulls = np.zeros((0, 2))       # the same change as a vector (x, y)
+        self.bound = np.zeros(0)            # per body: the most its belts may pull it over a look (_pull_now)
         self._handed = None                 # this tick's (rows, dvx, dvy) from Bottles.drive
         self.due = 0                        # the tick at which the free bottles are looked at next
         self.clear = np.zeros(0, int)       # per body: the tick up to which its last whole look holds
@@ -125,6 +126,7 @@ class FreeTransport:
         self.listed_at = np.vstack((self.listed_at, np.full((1, 2), np.inf)))
         self.pull = np.append(self.pull, 0.0)
         self.pulls = np.vstack((self.pulls, np.zeros((1, 2))))
+        self.bound = np.append(self.bound, 0.0)
         self.next_try = np.append(self.next_try, 0)
         self.clear = np.append(self.clear, 0)
 
@@ -210,35 +212,21 @@ class FreeTransport:
             pool = np.zeros(len(self.free), bool)
             pool[rows] = pool[among] = True
             play = np.flatnonzero(pool)
-        horizon = float(self.ahead[rows].max()) * times * self.dt
-        centres, extents = self._part_boxes(horizon)
-        # A body whose way ends on another belt is pulled by that belt's law there: its pull is
-        # bounded by the larger of now and there (for a pair that is not on one belt all the way).
-        ends = positions[play] + velocities[play] * horizon
-        there = fields.which(ends)
-        bound = self.pull.copy()
-        on = there >= 0
-        if on.any():
-            dvx, dvy = fields.changes_at(there[on], ends[on], velocities[play[on]], b.masses[play[on]])
-            bound[play[on]] = np.maximum(bound[play[on]], np.hypot(dvx, dvy))
+        centres, extents = self._part_boxes(float(self.ahead[rows].max()) * times * self.dt)
         return _touching(rows, play, float(times), self.dt, positions, orientations, velocities, spins, b.radii,
-                         b.half_heights, self.ahead, bound, self.pulls, self.free, fields.straight_law,
+                         b.half_heights, self.ahead, self.bound, self.pulls, self.free, fields.straight_law,
                          fields.regions(), centres, extents)
 
     def _pull_now(self, rows, positions, velocities) -> None:
-        """The pull each of `rows` gets from the belt under it at its velocity now — what the next
-        tick applies — in place of the last tick's, which is stale once a bottle crossed onto
-        another belt."""
-        if len(rows) == 0:
-            return
-        field = self.fields.which(positions[rows])
-        on = field >= 0
-        self.pull[rows], self.pulls[rows] = 0.0, 0.0
-        if on.any():
-            n = rows[on]
-            dvx, dvy = self.fields.changes_at(field[on], positions[n], velocities[n], self.bodies.masses[n])
-            self.pull[n] = np.hypot(dvx, dvy)
-            self.pulls[n, 0], self.pulls[n, 1] = dvx, dvy
+        """The pull each moving body of `rows` gets from the belt under it at its velocity now —
+        what the next tick applies — in place of the last tick's, which is stale once a bottle
+        crossed onto another belt; and `bound`, the most it may be pulled over a look (one, two
+        or LONG look-aheads forward): the larger of now and the law where its way ends, which may
+        be another belt's. Bodies not in `rows` (resting, parked) are not pulled."""
+        self.bound[:] = 0.0
+        if len(rows):
+            _pulls(np.asarray(rows, np.int64), positions, velocities, self.bodies.masses, self.ahead, self.dt,
+                   self.pull, self.pulls, self.bound, self.fields.regions(), self.fields.laws())
 
     def _part_boxes(self, horizon: float) -> tuple[np.ndarray, np.ndarray]:
         """The moving parts' boxes (centres, half extents) as the wake rule widens them for one
@@ -386,15 +374,9 @@ class FreeTransport:
         are already out of the engine's collision world and asleep there, with their exact pose.
         Returns the others, which the engine must wake."""
         b = self.bodies
-        zero = np.zeros((len(rows), 3))
-        field = self.fields.which(b.positions[rows])
-        on = field >= 0
-        # The pull each gets at the belt's new speed (a resting body's `pull` is from before it rested).
-        dvx, dvy = self.fields.changes_at(field[on], b.positions[rows[on]], zero[on], b.masses[rows[on]])
-        self.pull[rows] = 0.0
-        self.pulls[rows] = 0.0
-        self.pull[rows[on]] = np.hypot(dvx, dvy)
-        self.pulls[rows[on], 0], self.pulls[rows[on], 1] = dvx, dvy
+        # The pull each gets at the belt's new speed (a resting body's is from before it rested).
+        moving = b.in_play_rows() if b.moved_rows is None else b.moved_rows
+        self._pull_now(np.union1d(moving, rows), b.positions, b.velocities)
         go = self._leaving(rows[self.allowed[rows]])[0]
         if len(go) == 0:
             return rows
@@ -592,6 +574,30 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
 
 
 @njit(cache=True)
+def _pulls(rows, positions, velocities, masses, ahead, dt, pull, pulls, bound, regions, laws):
+    """FreeTransport._pull_now, body by body: the law under each now (pull, pulls), and the
+    largest of it and the law where its way ends one, two and LONG look-aheads on (bound)."""
+    is_arc = regions[3]
+    for n in rows:
+        x, y, z = positions[n, 0], positions[n, 1], positions[n, 2]
+        vx, vy = velocities[n, 0], velocities[n, 1]
+        most, here = 0.0, -1
+        for times in (0.0, 1.0, 2.0, float(LONG)):
+            h = ahead[n] * times * dt
+            k = field_at(x + vx * h, y + vy * h, z + velocities[n, 2] * h, *regions)
+            if times > 0.0 and k == here and not is_arc[k]:
+                continue        # the same straight belt: the same law at the same velocity
+            dvx = dvy = 0.0
+            if k >= 0:
+                dvx, dvy = law_at(k, x + vx * h, y + vy * h, vx, vy, masses[n], *laws)
+            size = math.hypot(dvx, dvy)
+            if times == 0.0:
+                pull[n], pulls[n, 0], pulls[n, 1], here = size, dvx, dvy, k
+            most = max(most, size)
+        bound[n] = most
+
+
+@njit(cache=True)
 def _advance(rows, on, dvx, dvy, positions, velocities, dt):
     """FreeTransport.advance: the velocity changes handed to `on` (a subset of `rows`, both in
     body order), then every row's x ← x + v·dt."""
@@ -709,6 +715,10 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
                 if abs(key[o] - key[a]) >= bound[a] + widest:
                     break
                 t += step
+                na, no, reach = play[a], play[o], bound[a] + bound[o]
+                if (abs(positions[na, 0] - positions[no, 0]) >= reach or abs(positions[na, 1] - positions[no, 1]) >= reach
+                        or abs(positions[na, 2] - positions[no, 2]) >= reach):
+                    continue      # their bounds do not meet
                 if _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights,
                          ahead, pull, pulls, belt, farthest, straight_law, regions, bound, steady):
                     touching[i] = True
@@ -719,11 +729,7 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
 def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, pull, pulls,
           belt, farthest, straight_law, regions, bound, steady):
     """Whether bodies play[a] and play[o] could touch within the look (FreeTransport._touching)."""
-    na, no = play[a], play[o]
-    reach = bound[a] + bound[o]
-    for c in range(3):
-        if abs(positions[na, c] - positions[no, c]) >= reach:
-            return False
+    na, no = play[a], play[o]       # their bounds meet (the caller tested them)
     if steady[a] and steady[o]:
         n = max(ahead[na], ahead[no]) * times
         ax, ay = positions[na, 0] - positions[no, 0], positions[na, 1] - positions[no, 1]
