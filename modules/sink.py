@@ -62,6 +62,7 @@ class Bin(Component):
         Slot.source("destination", "string", "its destination"),
         Slot.source("misrouted", "void", "a bottle for another lane was taken out"),
     )
+    EVENTS_WHEN = ("taken",)   # its rows are the bottles taken at this point
 
     def __init__(self, obj, name, world, trigger, counter, accepts: tuple[str, ...] | None, rejects: bool = False):
         super().__init__(obj, name)

@@ -49,6 +49,8 @@ class VolumeTrigger(Component):
         Slot.source("occupied", "bool", "an object is inside now"),
     )
 
+    EVENTS_WHEN = ("on_enter", "on_leave")   # its rows are the latch's entries and exits
+
     def __init__(self, obj, name, world, trigger):
         super().__init__(obj, name)
         self.world = world

@@ -69,3 +69,67 @@ def test_a_quiet_point_has_no_rows():
     signals = _bind([a, latch])
     signals.begin_step()
     assert EventRows([a, latch]).gather(3, signals, []) == []
+
+
+class Counter(Component):
+    """Its own rule, with rows only at points where `passed` fired (EVENTS_WHEN)."""
+
+    SLOTS = (Slot.source("passed", "void"), Slot.source("total", "int"))
+    EVENTS_WHEN = ("passed",)
+
+    def __init__(self, obj, name):
+        super().__init__(obj, name)
+        self.asked = 0
+
+    def events(self, tick):
+        self.asked += 1
+        return [(tick, "passed", "P1")] if self.active_passed() else []
+
+    def active_passed(self):
+        return self.signals.active[self.index["passed"]]
+
+
+def test_a_component_is_asked_only_when_its_events_slot_fired():
+    counter = Counter("c", "count")
+    signals = _bind([counter])
+    rows = EventRows([counter])
+    signals.begin_step()
+    counter.emit("total", 4)
+    assert rows.gather(5, signals, []) == []
+    assert counter.asked == 0
+    signals.begin_step()
+    counter.emit("passed")
+    assert rows.gather(6, signals, []) == [(6, "c.count.passed", "P1")]
+    assert counter.asked == 1
+
+
+def test_events_when_must_name_void_sources():
+    class Wrong(Counter):
+        EVENTS_WHEN = ("total",)
+
+        def events(self, tick):
+            return []
+
+    wrong = Wrong("w", "count")
+    _bind([wrong])
+    try:
+        EventRows([wrong])
+    except ValueError as exc:
+        assert str(exc) == "Wrong.EVENTS_WHEN names ['total'], not void sources of it (['passed'])"
+    else:
+        raise AssertionError("EventRows took an EVENTS_WHEN naming an int slot")
+
+
+def test_a_subclass_with_rows_of_its_own_is_asked_at_every_point():
+    class Gripping(Counter):
+        """Rows of its own at points where `passed` did not fire (like a gripper's grips)."""
+
+        def events(self, tick):
+            self.asked += 1
+            return [(tick, "gripped", "P2")]
+
+    gripping = Gripping("g", "gripper")
+    signals = _bind([gripping])
+    signals.begin_step()
+    assert EventRows([gripping]).gather(5, signals, []) == [(5, "g.gripper.gripped", "P2")]
+    assert gripping.asked == 1

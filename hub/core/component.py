@@ -23,6 +23,10 @@ class Component:
     #: Its `sense` computes only the sources something reads: with none, the master skips it (a
     #: source's 150 bottles, addressable by id, cost nothing unless a scenario reads one).
     QUIET_UNLESS_NEEDED: ClassVar[bool] = False
+    #: Void sources of which one is active at every point where its own `events` has rows: it is
+    #: asked only at those points (hub/run/events.py). Empty: asked at every point. Declared beside
+    #: `events`: a subclass that overrides `events` is asked at every point unless it declares its own.
+    EVENTS_WHEN: ClassVar[tuple[str, ...]] = ()
     #: Its slots are on the data plane (hub/bus/dataplane.py); False keeps them off it.
     PUBLISHED: ClassVar[bool] = True
 
