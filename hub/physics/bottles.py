@@ -161,9 +161,6 @@ class Bottles:
                     points[row] = pybullet.getBasePositionAndOrientation(second, client)[0]
                     velocities[row] = pybullet.getBaseVelocity(second, client)[0]
         dvx, dvy = fields.changes_at(f, points, velocities, b.masses[bodies])
-        if transport.enabled:
-            transport.pull[bodies] = np.hypot(dvx, dvy)   # what its looks allow for
-            transport.pulls[bodies, 0], transport.pulls[bodies, 1] = dvx, dvy
         if len(transport.rows):
             free = transport.free[bodies]
             if free.any():
