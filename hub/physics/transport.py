@@ -249,19 +249,8 @@ class FreeTransport:
         way, at its velocity and with the belt's pull (stays: its law, and so its pull, does not
         change on the way — one crossing onto a slower belt is pulled harder there)."""
         fields = self.fields
-        n = self.ahead[rows, None] * times
-        way = positions[rows] + velocities[rows] * (n * self.dt)
-        there = fields.which(way)
-        way[:, :2] += self.pulls[rows] * (n * (n + 1) / 2.0 * self.dt)
-        stays = (now >= 0) & (there == now) & (fields.which(way) == now)
-        ok = (now >= 0) & (there >= 0)
-        ok[ok] = fields.surfaces[now[ok]] == fields.surfaces[there[ok]]
-        still = np.zeros(len(rows), bool)
-        if ok.any():
-            v = velocities[rows]
-            still = ok & (fields.speeds[np.maximum(now, 0)] == 0.0) & ((v[:, 0] ** 2 + v[:, 1] ** 2) < STILL * STILL)
-            ok &= ~still
-        return ok, still, stays
+        return _on_belt(np.asarray(rows, np.int64), np.asarray(now, np.int64), float(times), self.dt, positions,
+                        velocities, self.pulls, self.ahead, fields.surfaces, fields.speeds, fields.regions())
 
     def _fields(self, rows, read_rows, under, positions) -> np.ndarray:
         """The field under each of `rows` as the last read found it (`under`, per `read_rows`),
@@ -571,6 +560,30 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
             if d < radii[n_] + length[i] + widen[i]:
                 hit[i] = True
     return hit
+
+
+@njit(cache=True)
+def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, surfaces, speeds, regions):
+    """FreeTransport._on_belt, row by row: (ok, still, stays)."""
+    count = rows.shape[0]
+    ok, still, stays = np.zeros(count, np.bool_), np.zeros(count, np.bool_), np.zeros(count, np.bool_)
+    for i in range(count):
+        n, k = rows[i], now[i]
+        if k < 0:
+            continue
+        m = ahead[n] * times
+        x = positions[n, 0] + velocities[n, 0] * (m * dt)
+        y = positions[n, 1] + velocities[n, 1] * (m * dt)
+        z = positions[n, 2] + velocities[n, 2] * (m * dt)
+        there = field_at(x, y, z, *regions)
+        if there < 0 or surfaces[k] != surfaces[there]:
+            continue
+        grow = m * (m + 1.0) / 2.0 * dt
+        stays[i] = there == k and field_at(x + pulls[n, 0] * grow, y + pulls[n, 1] * grow, z, *regions) == k
+        vx, vy = velocities[n, 0], velocities[n, 1]
+        still[i] = speeds[k] == 0.0 and vx * vx + vy * vy < STILL * STILL
+        ok[i] = not still[i]
+    return ok, still, stays
 
 
 @njit(cache=True)
