@@ -74,7 +74,10 @@ def test_pause_steps_and_resume_give_the_recording_of_a_run_nobody_held(bus, tmp
 
 
 def test_step_needs_a_pause_and_stop_ends_a_held_run(bus, tmp_path):
-    with hub(SCENARIO, tmp_path / "run", bus=bus) as run, Viewer(RUN, bus.endpoints) as operator:
+    # Paced at real time: unpaced, its 5 s may be over before the pause arrives (the hub runs it
+    # at well over 50× real time).
+    pacer = Pacer(150, factor=1.0)
+    with hub(SCENARIO, tmp_path / "run", bus=bus, pacer=pacer) as run, Viewer(RUN, bus.endpoints) as operator:
         run.start()
         answer = operator.command("step", value=1, wait=None)
         thread = running(run)

@@ -98,8 +98,7 @@ class FreeTransport:
         self._pair_row = np.zeros(0, int)   # (bottle, fixed box) pairs within LIST: the boxes each may reach
         self._pair_box = np.zeros(0, int)
         self.rows = np.zeros(0, int)        # the free rows, in body order
-        self.pull = np.zeros(0)             # per body: the velocity change the belt gave it at the last tick, m/s
-        self.pulls = np.zeros((0, 2))       # the same change as a vector (x, y)
+        self.pulls = np.zeros((0, 2))       # per body: the velocity change its belt gives it now (x, y), m/s (_pull_now)
         self.bound = np.zeros(0)            # per body: the most its belts may pull it over a look (_pull_now)
         self._handed = None                 # this tick's (rows, dvx, dvy) from Bottles.drive
         self.due = 0                        # the tick at which the free bottles are looked at next
@@ -124,7 +123,6 @@ class FreeTransport:
         self.enabled = self.enabled or bool(allowed)
         self.free = np.append(self.free, False)
         self.listed_at = np.vstack((self.listed_at, np.full((1, 2), np.inf)))
-        self.pull = np.append(self.pull, 0.0)
         self.pulls = np.vstack((self.pulls, np.zeros((1, 2))))
         self.bound = np.append(self.bound, 0.0)
         self.next_try = np.append(self.next_try, 0)
@@ -226,7 +224,7 @@ class FreeTransport:
         self.bound[:] = 0.0
         if len(rows):
             _pulls(np.asarray(rows, np.int64), positions, velocities, self.bodies.masses, self.ahead, self.dt,
-                   self.pull, self.pulls, self.bound, self.fields.regions(), self.fields.laws())
+                   self.pulls, self.bound, self.fields.regions(), self.fields.laws())
 
     def _part_boxes(self, horizon: float) -> tuple[np.ndarray, np.ndarray]:
         """The moving parts' boxes (centres, half extents) as the wake rule widens them for one
@@ -432,21 +430,11 @@ class FreeTransport:
         return rows[~near], rows[near]
 
     # --- the tick itself --------------------------------------------------------------------
-    def speed_changed(self, field: int) -> None:
-        """A belt's speed changed (`field`, at its new speed): the free bottles are looked at
-        whole before the next tick, and every moving bottle on it with the pull it gets there now
-        (the last tick's, which the looks would otherwise take, was at the old speed)."""
+    def speed_changed(self) -> None:
+        """A belt's speed changed: the free bottles are looked at whole before the next tick (whose
+        look takes every pull afresh, at the new speed)."""
         self.due = 0
         self._everything = True
-        b = self.bodies
-        if not b.started or len(self.free) == 0:
-            return
-        rows = b.in_play_rows() if b.moved_rows is None else b.moved_rows
-        on = rows[self.fields.which(b.positions[rows]) == field]
-        if len(on):
-            dvx, dvy = self.fields.changes_at(np.full(len(on), field), b.positions[on], b.velocities[on], b.masses[on])
-            self.pull[on] = np.hypot(dvx, dvy)
-            self.pulls[on, 0], self.pulls[on, 1] = dvx, dvy
 
     def hand(self, rows, dvx, dvy) -> None:
         """Before the engine's step: the velocity changes the belts' law gives the free `rows` on
@@ -587,8 +575,8 @@ def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, surfaces
 
 
 @njit(cache=True)
-def _pulls(rows, positions, velocities, masses, ahead, dt, pull, pulls, bound, regions, laws):
-    """FreeTransport._pull_now, body by body: the law under each now (pull, pulls), and the
+def _pulls(rows, positions, velocities, masses, ahead, dt, pulls, bound, regions, laws):
+    """FreeTransport._pull_now, body by body: the law under each now (pulls), and the
     largest of it and the law where its way ends one, two and LONG look-aheads on (bound)."""
     is_arc = regions[3]
     for n in rows:
@@ -605,7 +593,7 @@ def _pulls(rows, positions, velocities, masses, ahead, dt, pull, pulls, bound, r
                 dvx, dvy = law_at(k, x + vx * h, y + vy * h, vx, vy, masses[n], *laws)
             size = math.hypot(dvx, dvy)
             if times == 0.0:
-                pull[n], pulls[n, 0], pulls[n, 1], here = size, dvx, dvy, k
+                pulls[n, 0], pulls[n, 1], here = dvx, dvy, k
             most = max(most, size)
         bound[n] = most
 
@@ -671,7 +659,7 @@ def _box_distance(x, y, hx, hy):
 
 
 @njit(cache=True)
-def _touching(rows, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, pull,
+def _touching(rows, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most,
               pulls, free, straight_law, regions, part_centres, part_extents):
     """FreeTransport._touching: whether each of `rows` could touch a body of `play` (sorted, holds
     `rows`) or a moving part's box (part_centres, part_extents); `straight_law` per field: straight, its law scaled by the mass;
@@ -733,13 +721,13 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
                         or abs(positions[na, 2] - positions[no, 2]) >= reach):
                     continue      # their bounds do not meet
                 if _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights,
-                         ahead, pull, pulls, belt, farthest, straight_law, regions, bound, steady):
+                         ahead, most, pulls, belt, farthest, straight_law, regions, bound, steady):
                     touching[i] = True
     return touching
 
 
 @njit(cache=True)
-def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, pull, pulls,
+def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most, pulls,
           belt, farthest, straight_law, regions, bound, steady):
     """Whether bodies play[a] and play[o] could touch within the look (FreeTransport._touching)."""
     na, no = play[a], play[o]       # their bounds meet (the caller tested them)
@@ -755,7 +743,7 @@ def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, rad
             if belt[q] == -2:
                 belt[q] = _belt(play[q], farthest, dt, positions, velocities, pulls, straight_law, regions)
         if not (belt[a] >= 0 and belt[a] == belt[o]):
-            way += (pull[na] + pull[no]) * n * (n + 1.0) / 2.0 * dt
+            way += (most[na] + most[no]) * n * (n + 1.0) / 2.0 * dt   # the most each may be pulled (_pull_now)
         return math.hypot(ax, ay) - radii[na] - radii[no] - 2.0 * SHAPE_MARGIN < way
     ka, ko = ahead[na] * times, ahead[no] * times
     for c in range(3):

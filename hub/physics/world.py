@@ -207,7 +207,7 @@ class PhysicsWorld:
             return
         self.watch.belt_speed(speed)
         self.fields.set_speed(field, speed)
-        self.transport.speed_changed(field)
+        self.transport.speed_changed()
         if self.rest.resting.any():
             rows = self.rest.on_field(field, self.bodies.positions)
             if self.transport.enabled and len(rows):
