@@ -270,9 +270,8 @@ class FreeTransport:
         bottles follow their belts, each body's pull is taken afresh from its belt's law
         (`_pull_now`) and bounded by the law where its way ends — except the bodies awake in the
         engine, which contacts may throw: against those (`awake`) every free bottle is looked at
-        each time. Every free
-        bottle is looked at whole at once after a body was put down (`placed`), while a moving
-        part is under way (`moving`) and after a belt changed its speed."""
+        each time. Every free bottle is looked at whole at once after a body was put down
+        (`placed`), while a moving part is under way (`moving`) and after a belt changed its speed."""
         rows = self.rows
         if len(rows) == 0 or (tick < self.due and not placed and not moving):
             return
