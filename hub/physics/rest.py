@@ -92,14 +92,19 @@ def overlapping(centres_a, extents_a, centres_b, extents_b) -> np.ndarray:
     return (gap < 0.0).all(axis=2)
 
 
-def bounds(radii: np.ndarray, half_heights: np.ndarray, velocities: np.ndarray, spins: np.ndarray,
-           dt: float) -> np.ndarray:
-    """A half extent (N,) that holds `boxes` on every axis in any orientation: Σⱼ |Rᵢⱼ|·lⱼ is
-    at most |l| (Cauchy–Schwarz on a row of a rotation), and |vᵢ| at most |v|. Three numpy
-    calls instead of thirty: the test that comes first at every tick."""
-    size = np.sqrt(2.0 * radii * radii + half_heights * half_heights)
-    speed = np.sqrt((velocities * velocities).sum(axis=1)) + np.sqrt((spins * spins).sum(axis=1)) * size
-    return size + (SHAPE_MARGIN + BREAKING) + speed * dt
+@njit(cache=True)
+def bound(r, h, v, w, horizon, margin):
+    """A half extent that holds `boxes` of one upright body (radius r, half height h, velocity v,
+    spin w) on every axis in any orientation, headed `horizon` s: Σⱼ |Rᵢⱼ|·lⱼ is at most |l|
+    (Cauchy–Schwarz on a row of a rotation), and |vᵢ| at most |v|. The test that comes first."""
+    size = math.sqrt(2.0 * r * r + h * h)
+    return size + margin + (math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + turning(r, h, w)) * horizon
+
+
+@njit(cache=True)
+def turning(r, h, w):
+    """`swing` for one body: how fast its farthest point moves as it turns at spin w, m/s."""
+    return math.sqrt((w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * (2.0 * r * r + h * h))
 
 
 class Rest:
@@ -154,9 +159,6 @@ class Rest:
             return boxes(orientations[rows], self.radii[rows], self.half_heights[rows])
         return boxes(orientations[rows], self.radii[rows], self.half_heights[rows], velocities[rows], spins[rows],
                      self.dt)
-
-    def _bounds(self, rows, velocities, spins) -> np.ndarray:
-        return bounds(self.radii[rows], self.half_heights[rows], velocities[rows], spins[rows], self.dt)
 
     def candidates(self, rows: np.ndarray, velocities: np.ndarray, spins: np.ndarray, undriven: np.ndarray,
                    held: np.ndarray | None = None) -> np.ndarray:
@@ -263,7 +265,7 @@ class Rest:
 
 @njit(cache=True)
 def _within(rows, positions, velocities, spins, radii, half_heights, dt, centres, extents):
-    """(len(rows),): whether each body's bound (`bounds`: its size, margins and one tick's way)
+    """(len(rows),): whether each body's bound (`bound`: its size, margins and one tick's way)
     comes within any of the boxes (centres, extents) on every axis — the first box around all
     of them, then box by box."""
     near = np.zeros(rows.shape[0], np.bool_)
@@ -276,12 +278,7 @@ def _within(rows, positions, velocities, spins, radii, half_heights, dt, centres
             hi[a] = max(hi[a], centres[m, a] + extents[m, a])
     for i in range(rows.shape[0]):
         n = rows[i]
-        r, h = radii[n], half_heights[n]
-        size = math.sqrt(2.0 * r * r + h * h)
-        v = velocities[n]
-        w = spins[n]
-        speed = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * size
-        reach = size + (SHAPE_MARGIN + BREAKING) + speed * dt
+        reach = bound(radii[n], half_heights[n], velocities[n], spins[n], dt, SHAPE_MARGIN + BREAKING)
         p = positions[n]
         if not (p[0] + reach > lo[0] and p[0] - reach < hi[0] and p[1] + reach > lo[1] and p[1] - reach < hi[1]
                 and p[2] + reach > lo[2] and p[2] - reach < hi[2]):
@@ -323,5 +320,4 @@ def extent(q, r, h, v, w, horizon, axis, margin):
         a, b, c = 2.0 * (x * y + s * z), s * s - x * x + y * y - z * z, 2.0 * (y * z - s * x)
     else:
         a, b, c = 2.0 * (x * z - s * y), 2.0 * (y * z + s * x), s * s - x * x - y * y + z * z
-    turn = math.sqrt((w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * (2.0 * r * r + h * h))
-    return abs(a) * r + abs(b) * r + abs(c) * h + margin + (abs(v[axis]) + turn) * horizon
+    return abs(a) * r + abs(b) * r + abs(c) * h + margin + (abs(v[axis]) + turning(r, h, w)) * horizon

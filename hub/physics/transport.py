@@ -62,7 +62,7 @@ from numba import njit
 
 from hub.physics._quiet import quiet_stderr
 from hub.physics.fields import field_at, law_at
-from hub.physics.rest import SHAPE_MARGIN, boxes, extent
+from hub.physics.rest import SHAPE_MARGIN, bound, boxes, extent, turning
 
 with quiet_stderr():
     import pybullet
@@ -99,7 +99,7 @@ class FreeTransport:
         self._pair_box = np.zeros(0, int)
         self.rows = np.zeros(0, int)        # the free rows, in body order
         self.pulls = np.zeros((0, 2))       # per body: the velocity change its belt gives it now (x, y), m/s (_pull_now)
-        self.bound = np.zeros(0)            # per body: the most its belts may pull it over a look (_pull_now)
+        self.most = np.zeros(0)            # per body: the most its belts may pull it over a look, m/s (_pull_now)
         self._handed = None                 # this tick's (rows, dvx, dvy) from Bottles.drive
         self.due = 0                        # the tick at which the free bottles are looked at next
         self.clear = np.zeros(0, int)       # per body: the tick up to which its last whole look holds
@@ -124,7 +124,7 @@ class FreeTransport:
         self.free = np.append(self.free, False)
         self.listed_at = np.vstack((self.listed_at, np.full((1, 2), np.inf)))
         self.pulls = np.vstack((self.pulls, np.zeros((1, 2))))
-        self.bound = np.append(self.bound, 0.0)
+        self.most = np.append(self.most, 0.0)
         self.next_try = np.append(self.next_try, 0)
         self.clear = np.append(self.clear, 0)
 
@@ -190,7 +190,7 @@ class FreeTransport:
 
     def _touching(self, rows, times: int, positions, orientations, velocities, spins, among=None) -> np.ndarray:
         """(len(rows),): whether each of `rows` could touch another body in play (or of `among`)
-        or a moving part within `times` × its look-ahead. Their bounds first (rest.bounds; pairs found by a sweep
+        or a moving part within `times` × its look-ahead. Their bounds first (rest.bound; pairs found by a sweep
         along the plant's longer axis when there are many), then for each pair whose bounds meet:
         two steady bottles (free, or upright and steady in the engine) by their footprints and
         their relative motion — the difference of their velocities, of the belt's pull and their
@@ -212,19 +212,19 @@ class FreeTransport:
             play = np.flatnonzero(pool)
         centres, extents = self._part_boxes(float(self.ahead[rows].max()) * times * self.dt)
         return _touching(rows, play, float(times), self.dt, positions, orientations, velocities, spins, b.radii,
-                         b.half_heights, self.ahead, self.bound, self.pulls, self.free, fields.straight_law,
+                         b.half_heights, self.ahead, self.most, self.pulls, self.free, fields.straight_law,
                          fields.regions(), centres, extents)
 
     def _pull_now(self, rows, positions, velocities) -> None:
         """The pull each moving body of `rows` gets from the belt under it at its velocity now —
         what the next tick applies — in place of the last tick's, which is stale once a bottle
-        crossed onto another belt; and `bound`, the most it may be pulled over a look (one, two
+        crossed onto another belt; and `most`, the most it may be pulled over a look (one, two
         or LONG look-aheads forward): the larger of now and the law where its way ends, which may
         be another belt's. Bodies not in `rows` (resting, parked) are not pulled."""
-        self.bound[:] = 0.0
+        self.most[:] = 0.0
         if len(rows):
             _pulls(np.asarray(rows, np.int64), positions, velocities, self.bodies.masses, self.ahead, self.dt,
-                   self.pulls, self.bound, self.fields.regions(), self.fields.laws())
+                   self.pulls, self.most, self.fields.regions(), self.fields.laws())
 
     def _part_boxes(self, horizon: float) -> tuple[np.ndarray, np.ndarray]:
         """The moving parts' boxes (centres, half extents) as the wake rule widens them for one
@@ -574,18 +574,18 @@ def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, surfaces
 
 
 @njit(cache=True)
-def _pulls(rows, positions, velocities, masses, ahead, dt, pulls, bound, regions, laws):
+def _pulls(rows, positions, velocities, masses, ahead, dt, pulls, most, regions, laws):
     """FreeTransport._pull_now, body by body: the law under each now (pulls), and the
-    largest of it and the law where its way ends one, two and LONG look-aheads on (bound)."""
+    largest of it and the law where its way ends one, two and LONG look-aheads on (most)."""
     is_arc = regions[3]
     for n in rows:
         x, y, z = positions[n, 0], positions[n, 1], positions[n, 2]
         vx, vy = velocities[n, 0], velocities[n, 1]
-        most, here = 0.0, -1
+        largest, here = 0.0, -1
         for times in (0.0, 1.0, 2.0, float(LONG)):
             h = ahead[n] * times * dt
             k = field_at(x + vx * h, y + vy * h, z + velocities[n, 2] * h, *regions)
-            if times > 0.0 and k == here and not is_arc[k]:
+            if times > 0.0 and k == here and (k < 0 or not is_arc[k]):
                 continue        # the same straight belt: the same law at the same velocity
             dvx = dvy = 0.0
             if k >= 0:
@@ -593,8 +593,8 @@ def _pulls(rows, positions, velocities, masses, ahead, dt, pulls, bound, regions
             size = math.hypot(dvx, dvy)
             if times == 0.0:
                 pulls[n, 0], pulls[n, 1], here = dvx, dvy, k
-            most = max(most, size)
-        bound[n] = most
+            largest = max(largest, size)
+        most[n] = largest
 
 
 @njit(cache=True)
@@ -628,9 +628,7 @@ def _listing(rows, positions, radii, half_heights, pair_row, pair_box, c, h, cos
             if abs(positions[n, 2] - c[k, 2]) > h[k, 2] + half_heights[n] + FIXED_MARGIN:
                 continue
             dx, dy = positions[n, 0] - c[k, 0], positions[n, 1] - c[k, 1]
-            gx = max(abs(cos[k] * dx + sin[k] * dy) - h[k, 0], 0.0)
-            gy = max(abs(cos[k] * dy - sin[k] * dx) - h[k, 1], 0.0)
-            if math.hypot(gx, gy) - radii[n] < LIST:
+            if _box_distance(cos[k] * dx + sin[k] * dy, cos[k] * dy - sin[k] * dx, h[k, 0], h[k, 1]) - radii[n] < LIST:
                 out_row.append(n)
                 out_box.append(k)
     return np.array(out_row, np.int64), np.array(out_box, np.int64)
@@ -662,10 +660,10 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
               pulls, free, straight_law, regions, part_centres, part_extents):
     """FreeTransport._touching: whether each of `rows` could touch a body of `play` (sorted, holds
     `rows`) or a moving part's box (part_centres, part_extents); `straight_law` per field: straight, its law scaled by the mass;
-    `regions`: ForceFields.regions. Pairs by their bounds (rest.bounds), found along
+    `regions`: ForceFields.regions. Pairs by their bounds (rest.bound), found along
     the plant's longer axis from each row outwards, then as FreeTransport._touching says."""
     count = play.shape[0]
-    bound = np.empty(count)
+    reaches = np.empty(count)
     steady = np.empty(count, np.bool_)
     belt = np.full(count, -2, np.int64)   # worked out for a body once a pair needs it (`_belt`)
     tilt = math.cos(TILT)
@@ -674,13 +672,9 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
         farthest = max(farthest, ahead[play[q]] * times)
     for q in range(count):
         n = play[q]
-        k = ahead[n] * times
-        r, h = radii[n], half_heights[n]
-        size = math.sqrt(2.0 * r * r + h * h)
-        v, w = velocities[n], spins[n]
+        w = spins[n]
+        reaches[q] = bound(radii[n], half_heights[n], velocities[n], w, ahead[n] * times * dt, SHAPE_MARGIN)
         spin = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-        bound[q] = (size + SHAPE_MARGIN
-                    + (math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) + spin * size) * k * dt)
         x, y = orientations[n, 0], orientations[n, 1]
         # Upright and not rocking much: its footprint is its base's circle (a bob up and down moves it not at all).
         steady[q] = free[n] or (1.0 - 2.0 * (x * x + y * y) > tilt and spin < SPIN)
@@ -698,36 +692,36 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
     rank = np.empty(count, np.int64)
     for q in range(count):
         rank[order[q]] = q
-    widest = bound.max() if count else 0.0
+    widest = reaches.max() if count else 0.0
     touching = np.zeros(rows.shape[0], np.bool_)
     for i in range(rows.shape[0]):
         a = np.searchsorted(play, rows[i])
         n = rows[i]
-        for m in range(part_centres.shape[0]):   # a moving part's box against the bound (which holds the box)
-            if (abs(positions[n, 0] - part_centres[m, 0]) < bound[a] + part_extents[m, 0]
-                    and abs(positions[n, 1] - part_centres[m, 1]) < bound[a] + part_extents[m, 1]
-                    and abs(positions[n, 2] - part_centres[m, 2]) < bound[a] + part_extents[m, 2]):
+        for m in range(part_centres.shape[0]):   # a moving part's box against the reaches (which holds the box)
+            if (abs(positions[n, 0] - part_centres[m, 0]) < reaches[a] + part_extents[m, 0]
+                    and abs(positions[n, 1] - part_centres[m, 1]) < reaches[a] + part_extents[m, 1]
+                    and abs(positions[n, 2] - part_centres[m, 2]) < reaches[a] + part_extents[m, 2]):
                 touching[i] = True
         for step in (1, -1):
             t = rank[a] + step
             while 0 <= t < count and not touching[i]:
                 o = order[t]
-                if abs(key[o] - key[a]) >= bound[a] + widest:
+                if abs(key[o] - key[a]) >= reaches[a] + widest:
                     break
                 t += step
-                na, no, reach = play[a], play[o], bound[a] + bound[o]
+                na, no, reach = play[a], play[o], reaches[a] + reaches[o]
                 if (abs(positions[na, 0] - positions[no, 0]) >= reach or abs(positions[na, 1] - positions[no, 1]) >= reach
                         or abs(positions[na, 2] - positions[no, 2]) >= reach):
                     continue      # their bounds do not meet
                 if _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights,
-                         ahead, most, pulls, belt, farthest, straight_law, regions, bound, steady):
+                         ahead, most, pulls, belt, farthest, straight_law, regions, reaches, steady):
                     touching[i] = True
     return touching
 
 
 @njit(cache=True)
 def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most, pulls,
-          belt, farthest, straight_law, regions, bound, steady):
+          belt, farthest, straight_law, regions, reaches, steady):
     """Whether bodies play[a] and play[o] could touch within the look (FreeTransport._touching)."""
     na, no = play[a], play[o]       # their bounds meet (the caller tested them)
     if steady[a] and steady[o]:
@@ -736,7 +730,7 @@ def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, rad
         if abs(positions[na, 2] - positions[no, 2]) >= half_heights[na] + half_heights[no]:
             return False
         closing = math.hypot(velocities[na, 0] - velocities[no, 0], velocities[na, 1] - velocities[no, 1])
-        rock = _swing(radii[na], half_heights[na], spins[na]) + _swing(radii[no], half_heights[no], spins[no])
+        rock = turning(radii[na], half_heights[na], spins[na]) + turning(radii[no], half_heights[no], spins[no])
         way = (closing + rock) * n * dt
         for q in (a, o):
             if belt[q] == -2:
@@ -774,8 +768,3 @@ def _belt(n, m, dt, positions, velocities, pulls, straight_law, regions):
         if field_at(x + cx, y + cy, z, *regions) != now:
             return -1
     return now
-
-
-@njit(cache=True)
-def _swing(r, h, w):
-    return math.sqrt((w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * (2.0 * r * r + h * h))

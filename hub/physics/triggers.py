@@ -153,8 +153,7 @@ class VolumeTriggers:
 @njit(cache=True)
 def _overlap(positions, radii, half_heights, boxes, centers, half_extents, cos, sin):
     """(len(boxes), bodies): whether each upright cylinder (centre, radius, half height) overlaps
-    each of the yawed `boxes`: in the box's frame the horizontal distance from its axis to the
-    box at most its radius, and the heights overlapping."""
+    each of the yawed `boxes` (`_inside`)."""
     out = np.zeros((boxes.shape[0], positions.shape[0]), np.bool_)
     for t in range(boxes.shape[0]):
         k = boxes[t]
@@ -162,12 +161,19 @@ def _overlap(positions, radii, half_heights, boxes, centers, half_extents, cos, 
         hx, hy, hz = half_extents[k, 0], half_extents[k, 1], half_extents[k, 2]
         c, s = cos[k], sin[k]
         for n in range(positions.shape[0]):
-            dx, dy = positions[n, 0] - cx, positions[n, 1] - cy
-            gx = max(abs(c * dx + s * dy) - hx, 0.0)
-            gy = max(abs(c * dy - s * dx) - hy, 0.0)
-            out[t, n] = (gx * gx + gy * gy <= radii[n] * radii[n]
-                         and abs(positions[n, 2] - cz) <= hz + half_heights[n])
+            out[t, n] = _inside(positions[n], radii[n], half_heights[n], cx, cy, cz, hx, hy, hz, c, s)
     return out
+
+
+@njit(cache=True)
+def _inside(p, r, h, cx, cy, cz, hx, hy, hz, c, s):
+    """Whether the upright cylinder about p (radius r, half height h) overlaps the box (centre,
+    half extents, cos and sin of its yaw): in the box's frame the horizontal distance from its
+    axis to the box at most r, and the heights overlapping."""
+    dx, dy = p[0] - cx, p[1] - cy
+    gx = max(abs(c * dx + s * dy) - hx, 0.0)
+    gy = max(abs(c * dy - s * dx) - hy, 0.0)
+    return gx * gx + gy * gy <= r * r and abs(p[2] - cz) <= hz + h
 
 
 @njit(cache=True)
@@ -183,10 +189,7 @@ def _moved(inside, stayed, moved, positions, radii, half_heights, centers, half_
         c, s = cos[t], sin[t]
         left = []
         for n in moved:
-            dx, dy = positions[n, 0] - cx, positions[n, 1] - cy
-            gx = max(abs(c * dx + s * dy) - hx, 0.0)
-            gy = max(abs(c * dy - s * dx) - hy, 0.0)
-            now = gx * gx + gy * gy <= radii[n] * radii[n] and abs(positions[n, 2] - cz) <= hz + half_heights[n]
+            now = _inside(positions[n], radii[n], half_heights[n], cx, cy, cz, hx, hy, hz, c, s)
             if now != inside[t, n]:
                 inside[t, n] = now
                 if now:

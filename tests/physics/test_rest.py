@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hub.physics import PhysicsWorld
-from hub.physics.rest import BREAKING, bounds, boxes
+from hub.physics.rest import BREAKING, SHAPE_MARGIN, bound, boxes
 
 RATE = 150
 
@@ -139,9 +139,9 @@ def test_the_hubs_boxes_hold_the_engines_boxes_in_any_pose():
             ours = boxes(world.orientations[bodies], world.radii[bodies], world.half_heights[bodies]) - BREAKING
             assert (ours >= engine).all()
             worst = max(worst, (ours - engine).max())
-            bound = bounds(world.radii[bodies], world.half_heights[bodies], world.velocities[bodies],
-                           world.angular_velocities[bodies], world.dt)
-            assert (bound[:, None] >= ours + BREAKING - 1e-12).all()
+            reach = np.array([bound(world.radii[n], world.half_heights[n], world.velocities[n],
+                                    world.angular_velocities[n], world.dt, SHAPE_MARGIN + BREAKING) for n in bodies])
+            assert (reach[:, None] >= ours + BREAKING - 1e-12).all()
         assert worst < 0.003
         tilts = np.array(tilts)
         assert (tilts > 60).sum() > 100 and ((tilts > 5) & (tilts < 60)).sum() > 50   # turned every way
