@@ -161,19 +161,20 @@ def _overlap(positions, radii, half_heights, boxes, centers, half_extents, cos, 
         hx, hy, hz = half_extents[k, 0], half_extents[k, 1], half_extents[k, 2]
         c, s = cos[k], sin[k]
         for n in range(positions.shape[0]):
-            out[t, n] = _inside(positions[n], radii[n], half_heights[n], cx, cy, cz, hx, hy, hz, c, s)
+            out[t, n] = _inside(positions[n, 0], positions[n, 1], positions[n, 2], radii[n], half_heights[n],
+                                cx, cy, cz, hx, hy, hz, c, s)
     return out
 
 
 @njit(cache=True)
-def _inside(p, r, h, cx, cy, cz, hx, hy, hz, c, s):
-    """Whether the upright cylinder about p (radius r, half height h) overlaps the box (centre,
-    half extents, cos and sin of its yaw): in the box's frame the horizontal distance from its
+def _inside(px, py, pz, r, h, cx, cy, cz, hx, hy, hz, c, s):
+    """Whether the upright cylinder about (px, py, pz) (radius r, half height h) overlaps the box
+    (centre, half extents, cos and sin of its yaw; scalars, not rows, at a call per pair): in the box's frame the horizontal distance from its
     axis to the box at most r, and the heights overlapping."""
-    dx, dy = p[0] - cx, p[1] - cy
+    dx, dy = px - cx, py - cy
     gx = max(abs(c * dx + s * dy) - hx, 0.0)
     gy = max(abs(c * dy - s * dx) - hy, 0.0)
-    return gx * gx + gy * gy <= r * r and abs(p[2] - cz) <= hz + h
+    return gx * gx + gy * gy <= r * r and abs(pz - cz) <= hz + h
 
 
 @njit(cache=True)
@@ -189,7 +190,8 @@ def _moved(inside, stayed, moved, positions, radii, half_heights, centers, half_
         c, s = cos[t], sin[t]
         left = []
         for n in moved:
-            now = _inside(positions[n], radii[n], half_heights[n], cx, cy, cz, hx, hy, hz, c, s)
+            now = _inside(positions[n, 0], positions[n, 1], positions[n, 2], radii[n], half_heights[n],
+                          cx, cy, cz, hx, hy, hz, c, s)
             if now != inside[t, n]:
                 inside[t, n] = now
                 if now:
