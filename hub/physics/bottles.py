@@ -135,7 +135,6 @@ class Bottles:
         else:
             on = field >= 0
             bodies, f = rows[on], field[on]
-        transport = self.transport
         if len(bodies) == 0:
             return
         if self._grips is None:
@@ -160,25 +159,21 @@ class Bottles:
                     # The paper's model: the field sees the second body's own position and velocity.
                     points[row] = pybullet.getBasePositionAndOrientation(second, client)[0]
                     velocities[row] = pybullet.getBaseVelocity(second, client)[0]
-        dvx, dvy = fields.changes_at(f, points, velocities, b.masses[bodies])
-        if len(transport.rows):
-            free = transport.free[bodies]
-            if free.any():
-                transport.hand(bodies[free], dvx[free], dvy[free])
-                engine = ~free
-                bodies, f, points = bodies[engine], f[engine], points[engine]
-                dvx, dvy = dvx[engine], dvy[engine]
-        per_second = b.masses[bodies] / fields.dt
-        fx, fy = (dvx * per_second).tolist(), (dvy * per_second).tolist()
+        transport = self.transport
+        free = transport.free[bodies] if len(transport.rows) else np.zeros(len(bodies), bool)
+        free_at, dvx, dvy, engine_at, fx, fy, torques = fields.drive(
+            f, points, velocities, b.masses[bodies], b.radii[bodies], b.angular_velocities[bodies, 2], free)
+        if len(free_at):
+            transport.hand(bodies[free_at], dvx, dvy)
+        engine = bodies[engine_at]
         # A world-frame force acts at `at`: the centre of mass adds no torque, the base does.
         # Positional arguments: keywords cost pybullet's argument parser a tenth of the call.
         apply, frame = pybullet.applyExternalForce, pybullet.WORLD_FRAME
-        for target, x, y, at in zip(targets[bodies].tolist(), fx, fy, points.tolist()):
+        for target, x, y, at in zip(targets[engine].tolist(), fx.tolist(), fy.tolist(), points[engine_at].tolist()):
             apply(target, -1, (x, y, 0.0), at, frame, client)
         # The surface also grips the base against spinning; only bottles that spin get a call.
-        torques = fields.spin_torques(f, b.angular_velocities[bodies, 2], b.masses[bodies], b.radii[bodies])
         spinning = np.flatnonzero(torques)
         if len(spinning):
             twist = pybullet.applyExternalTorque
-            for target, torque in zip(ids[bodies[spinning]].tolist(), torques[spinning].tolist()):
+            for target, torque in zip(ids[engine[spinning]].tolist(), torques[spinning].tolist()):
                 twist(target, -1, (0.0, 0.0, torque), frame, client)

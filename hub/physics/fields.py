@@ -72,7 +72,6 @@ class ForceFields:
         self.speeds = np.zeros(0)
         self.limits = np.zeros(0)      # most acceleration friction can give, m/s² (inf: none)
         self.surfaces = np.zeros(0)    # height of the belt's surface, m (its centre line's)
-        self.limited = False           # some field has a finite limit
         self.straight_law = np.zeros(0, bool)
 
     def __len__(self) -> int:
@@ -100,7 +99,6 @@ class ForceFields:
         self.speeds = np.append(self.speeds, float(speed))
         self.limits = np.append(self.limits, float(limit))
         self.surfaces = np.append(self.surfaces, float(line.start.z))
-        self.limited = bool(np.isfinite(self.limits).any())
         # Two bottles on it follow one law that never lets their velocities part (transport.py):
         # not on an arc, nor with the gain per body, nor with the explicit law (unstable past k·dt = 2).
         self.straight_law = ~self.lines.is_arc & self.per_mass & (not self.explicit)
@@ -164,16 +162,22 @@ class ForceFields:
         return _changes(np.asarray(f, np.int64), np.ascontiguousarray(points, float),
                         np.ascontiguousarray(velocities, float), np.ascontiguousarray(masses, float), *self.laws())
 
+    def drive(self, f: np.ndarray, points: np.ndarray, velocities: np.ndarray, masses: np.ndarray,
+              radii: np.ndarray, spins: np.ndarray, free: np.ndarray) -> tuple:
+        """A tick's drive of M bodies on the fields `f` (Bottles.drive), split in one compiled
+        loop: (free_at, dvx, dvy) for those with `free` set — their velocity changes, which free
+        transport adds itself — and (engine_at, fx, fy, torques) for the others — the forces
+        (`forces_at`) and spin torques (`spin_torques`) the engine applies. `*_at` index the M."""
+        return _drive(np.asarray(f, np.int64), np.ascontiguousarray(points, float),
+                      np.ascontiguousarray(velocities, float), np.ascontiguousarray(masses, float),
+                      np.ascontiguousarray(radii, float), np.ascontiguousarray(spins, float),
+                      np.asarray(free, np.bool_), *self.laws())
+
     def laws(self) -> tuple:
         """The belts' laws as compiled loops take them (`law_at`)."""
         lines = self.lines
         return (self.dt, self.explicit, self.rates, self.per_mass, self.speeds, self.surface, self.limits,
                 lines.is_arc, lines.origin, lines.cos, lines.sin, lines.turn, lines.radius)
-
-    def _keep(self, rate: np.ndarray) -> np.ndarray:
-        """What is left of a velocity error after one tick at `rate` (1/s): e^(−k·dt) exactly, or
-        the explicit law's 1 − k·dt."""
-        return 1.0 - rate * self.dt if self.explicit else np.exp(-rate * self.dt)
 
     def spin_torques(self, f: np.ndarray, spin: np.ndarray, masses: np.ndarray, radii: np.ndarray) -> np.ndarray:
         """Torques about the vertical (M,) with which a belt's surface grips the base of bottles
@@ -188,18 +192,10 @@ class ForceFields:
         turn about its own axis shows nowhere (it is round, its sensors read positions), while
         a spinning bottle's slight rocking grows in the engine (the paper's loop, 50 s: tilt
         0.6° without spin, 1.6° spun with each curve)."""
-        torques = np.zeros(len(f))
-        on = self.surface[f] & (np.abs(spin) > SPIN_AT_REST)
-        if not on.any():
-            return torques
-        rate = np.where(self.per_mass[f], self.rates[f], self.rates[f] / masses)
-        inertia = masses * radii * radii / 2.0          # the homogeneous cylinder's, about its axis
-        torque = -spin * (1.0 - self._keep(rate)) * inertia / self.dt
-        if self.limited:
-            most = (2.0 / 3.0) * self.limits[f] * masses * radii
-            torque = np.clip(torque, -most, most)
-        torques[on] = torque[on]
-        return torques
+        return np.array([spin_torque_at(k, w, m, r, self.dt, self.explicit, self.rates, self.per_mass, self.surface,
+                                        self.limits)
+                         for k, w, m, r in zip(np.asarray(f).tolist(), np.asarray(spin, float).tolist(),
+                                               np.asarray(masses, float).tolist(), np.asarray(radii, float).tolist())])
 
 
 @njit(cache=True)
@@ -246,6 +242,44 @@ def _changes(f, points, velocities, masses, dt, explicit, rates, per_mass, speed
                                 dt, explicit, rates, per_mass, speeds, surface, limits, is_arc, origin, cos, sin, turn,
                                 radius)
     return dvx, dvy
+
+
+@njit(cache=True)
+def _drive(f, points, velocities, masses, radii, spins, free, dt, explicit, rates, per_mass, speeds, surface, limits,
+           is_arc, origin, cos, sin, turn, radius):
+    """ForceFields.drive, body by body."""
+    n = f.shape[0]
+    count = 0
+    for i in range(n):
+        count += free[i]
+    free_at, dvx, dvy = np.empty(count, np.int64), np.empty(count), np.empty(count)
+    engine_at, fx, fy, torques = np.empty(n - count, np.int64), np.empty(n - count), np.empty(n - count), np.empty(n - count)
+    j = e = 0
+    for i in range(n):
+        x, y = law_at(f[i], points[i, 0], points[i, 1], velocities[i, 0], velocities[i, 1], masses[i], dt, explicit,
+                      rates, per_mass, speeds, surface, limits, is_arc, origin, cos, sin, turn, radius)
+        if free[i]:
+            free_at[j], dvx[j], dvy[j] = i, x, y
+            j += 1
+        else:
+            per_second = masses[i] / dt
+            engine_at[e], fx[e], fy[e] = i, x * per_second, y * per_second
+            torques[e] = spin_torque_at(f[i], spins[i], masses[i], radii[i], dt, explicit, rates, per_mass, surface,
+                                        limits)
+            e += 1
+    return free_at, dvx, dvy, engine_at, fx, fy, torques
+
+
+@njit(cache=True)
+def spin_torque_at(k, spin, mass, radius, dt, explicit, rates, per_mass, surface, limits):
+    """ForceFields.spin_torques for one body on field `k`."""
+    if not surface[k] or abs(spin) <= SPIN_AT_REST:
+        return 0.0
+    rate = rates[k] if per_mass[k] else rates[k] / mass
+    keep = 1.0 - rate * dt if explicit else math.exp(-rate * dt)
+    torque = -spin * (1.0 - keep) * (mass * radius * radius / 2.0) / dt   # the homogeneous cylinder's inertia
+    most = (2.0 / 3.0) * limits[k] * mass * radius
+    return min(max(torque, -most), most)
 
 
 @njit(cache=True)

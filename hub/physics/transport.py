@@ -21,13 +21,16 @@ three tests, each looking a number of ticks forward (the bottle's `lookahead`, d
   them against what their relative velocity, their rocking and the belt's pull can close; two
   on one straight belt whose law scales with the mass, both staying on it, by their relative
   velocity and rocking alone (that law never lets two velocities part) — so that a line of
-  bottles 2 cm apart rides free, and sets off free together; any other pair by the wake rule's
-  boxes without its contact breaking threshold (a free bottle is in no island), each headed as
-  far; a moving part's box likewise;
-- fixed geometry: rails and walls, gates and blades whether solid or not, and the spheres robot
-  arms reach: the distance of its way ahead — at its velocity, and the belt's pull along its own
-  direction, so that a bottle setting off between rails is pulled along them — from each box
-  listed within LIST of it, against its radius and FIXED_MARGIN;
+  bottles 2 cm apart rides free, and sets off free together; two such bottles, both free, at
+  one velocity and not turning, ride free even touching, as a train (a queue that stood at
+  rest in pairs sets off so), and come back into the engine together; any other pair by the
+  wake rule's boxes without its contact breaking threshold (a free bottle is in no island),
+  each headed as far; a moving part's box likewise;
+- fixed geometry: rails and walls, gates and blades whether solid or not: the distance of its
+  way ahead — at its velocity, and the belt's pull along its own direction, so that a bottle
+  setting off between rails is pulled along them — from each box listed within LIST of it,
+  against its radius and FIXED_MARGIN (a robot arm has no collision shapes: the bottle it
+  lets go of is a body like the others, looked at whole at once);
 - the belt: the point it is headed to lies on a belt at the same height (a hand-over between
   chained belts is crossed free: the field under it is looked up at every tick, half-open as
   the engine-driven bottle's is), and it is not coming to a stop on a still belt: there it rests
@@ -40,7 +43,7 @@ is too far, or where its way crosses onto another belt), only when its last whol
 bodies stand, free bottles follow their belts, and each body's pull is its belt's law now (not
 the last tick's: one that crossed onto another belt is pulled by that one), bounded by the law
 where its way ends — and against the bodies awake in the engine, which contacts may throw, at
-every look. Every free bottle is looked at whole at once after a bottle was put down, while a
+every look. Every free bottle is looked at whole at once after a bottle was put down or let go of, while a
 moving part is under way and after a belt changed its speed.
 
 A bottle leaves the engine when it rides a belt upright and steady (tilt under 1°, spin under
@@ -110,10 +113,11 @@ class FreeTransport:
         self.started = 0                    # how many times a resting bottle rode off free (from_rest)
         self.stopped = 0                    # and a free one came to rest without the engine (_settle)
         self._fixed = None                  # (centres, half extents, cos, sin) of fixed boxes
-        self._spheres = (np.zeros((0, 3)), np.zeros(0))
         self._moving = None                 # MovingParts, tested at every look (their boxes move)
         self._parts_at_rest = None          # their boxes while none moves
         self._probes: dict[int, int] = {}   # body row → collision shape, for `check`
+        self._trains_seen: dict = {}        # for `check`: free pairs that touch (a train's), their depth when first seen
+        self._checked: set[int] = set()     # the free rows at the last `check`
 
     def add(self, allowed: bool, ahead: int = LOOKAHEAD) -> None:
         if not (isinstance(ahead, int) and ahead >= 2):
@@ -128,17 +132,17 @@ class FreeTransport:
         self.next_try = np.append(self.next_try, 0)
         self.clear = np.append(self.clear, 0)
 
-    def arm(self, fixed_boxes, spheres, moving) -> None:
+    def arm(self, fixed_boxes, moving) -> None:
         """At the start: the fixed geometry a free bottle keeps clear of — boxes (centre, half
-        extents, yaw) of rails, walls, gates and blades, not the floors — the spheres robot arms
-        reach (centre, radius), and the moving parts."""
+        extents, yaw) of rails, walls, gates and blades, not the floors — and the moving parts.
+        A robot arm has no collision shapes, and the bottle it carries none while it is held:
+        the bottle it lets go of is an awake body like any other, looked at whole against every
+        free bottle before the next tick (`look_whole`)."""
         if fixed_boxes:
             c = np.array([b[0] for b in fixed_boxes], float)
             h = np.array([b[1] for b in fixed_boxes], float)
             yaw = np.array([b[2] for b in fixed_boxes], float)
             self._fixed = (c, h, np.cos(yaw), np.sin(yaw))
-        if spheres:
-            self._spheres = (np.array([s[0] for s in spheres], float), np.array([s[1] for s in spheres], float))
         self._moving = moving
 
     # --- the tests ------------------------------------------------------------------------
@@ -154,7 +158,7 @@ class FreeTransport:
 
     def _fixed_hit(self, rows, times: int, positions, velocities) -> np.ndarray:
         """(len(rows),): whether each of `rows`, headed on for `times` × its look-ahead (n ticks),
-        could reach a fixed box or an arm's sphere.
+        could reach a fixed box.
 
         Its way: n ticks at its velocity v, plus what the belt's pull adds — a pull that does
         not grow (the relaxing law, or friction's constant cap; a belt's speed change looks
@@ -176,9 +180,8 @@ class FreeTransport:
             self._list(rows[stale], positions)
         c, h, cos, sin = self._fixed if self._fixed is not None else (np.zeros((0, 3)), np.zeros((0, 3)),
                                                                        np.zeros(0), np.zeros(0))
-        centres, reach = self._spheres
         return _fixed_hit(rows, float(times), self.dt, positions, velocities, self.pulls, self.ahead, b.radii,
-                          b.half_heights, self._pair_row, self._pair_box, c, h, cos, sin, centres, reach)
+                          b.half_heights, self._pair_row, self._pair_box, c, h, cos, sin)
 
     def steady(self, rows, orientations, velocities, spins) -> np.ndarray:
         """(len(rows),): upright and steady as a riding bottle is (tilt under TILT, spin under
@@ -188,32 +191,48 @@ class FreeTransport:
         return (((1.0 - 2.0 * (x * x + y * y) > np.cos(TILT)) & ((w * w).sum(axis=1) < SPIN * SPIN)
                  & (np.abs(velocities[rows, 2]) < RISE)) | self.free[rows])
 
-    def _touching(self, rows, times: int, positions, orientations, velocities, spins, among=None) -> np.ndarray:
+    def _touching(self, rows, times: int, positions, orientations, velocities, spins, among=None,
+                  joined=None) -> np.ndarray:
         """(len(rows),): whether each of `rows` could touch another body in play (or of `among`)
-        or a moving part within `times` × its look-ahead. Their bounds first (rest.bound; pairs found by a sweep
-        along the plant's longer axis when there are many), then for each pair whose bounds meet:
-        two steady bottles (free, or upright and steady in the engine) by their footprints and
-        their relative motion — the difference of their velocities, of the belt's pull and their
-        rocking brings them together, nothing else; any other pair by the wake rule's boxes,
-        each body headed as far.
+        or a moving part within `times` × its look-ahead. Their bounds first (rest.bound; pairs
+        found by a sweep along the plant's longer axis when there are many), then for each pair
+        whose bounds meet: two steady bottles (free, or upright and steady in the engine) by their
+        footprints and their relative motion — the difference of their velocities, of the belt's
+        pull and their rocking brings them together, nothing else; any other pair by the wake
+        rule's boxes, each body headed as far.
 
         Two steady bottles on one straight belt whose law scales with the mass, both staying
         on it as far as the look goes (`belt`), follow the same law, which never lets two
         velocities part — on u = v_belt − v it is u ↦ k·u, or with friction's cap
         u ↦ u − (1 − k)·P(u), P the projection onto a ball: both non-expansive — so their gap
         changes by at most n·|v_a − v_b|·dt, however hard the belt pulls: a line of bottles
-        setting off from rest together stays a line. One compiled loop (`_touching` below)."""
+        setting off from rest together stays a line. Two such bottles both `joined` (by default:
+        free) at the same velocity, bit for bit, and not turning are a train: the law gives both
+        the same velocity change at every tick and the engine's position step moves both alike,
+        so their gap stays what it is, to rounding, even when they touch (a magazine's queue
+        stood at rest in pairs, and rides off together). Free bottles nearer each other than
+        2·SHAPE_MARGIN are a train's, and when one of them comes back into the engine the other
+        comes too (`_trains`). One compiled loop (`_touching` below)."""
         b, fields = self.bodies, self.fields
+        play = b.in_play_rows()
         if among is None:
-            play = b.in_play_rows()
-        else:
-            pool = np.zeros(len(self.free), bool)
-            pool[rows] = pool[among] = True
-            play = np.flatnonzero(pool)
+            against = np.ones(len(self.free), bool)
+        else:   # free bottles follow laws the whole looks bound: only the pairs with `among`
+            against = np.zeros(len(self.free), bool)
+            against[among] = True
         centres, extents = self._part_boxes(float(self.ahead[rows].max()) * times * self.dt)
         return _touching(rows, play, float(times), self.dt, positions, orientations, velocities, spins, b.radii,
-                         b.half_heights, self.ahead, self.most, self.pulls, self.free, fields.straight_law,
-                         fields.regions(), centres, extents)
+                         b.half_heights, self.ahead, self.most, self.pulls, self.free,
+                         self.free if joined is None else joined, against, fields.straight_law, fields.regions(),
+                         centres, extents)
+
+    def _trains(self, seeds: np.ndarray, pool: np.ndarray) -> np.ndarray:
+        """`seeds` (a mask over bodies) grown by the bodies of `pool` (rows) whose footprints
+        come within 2·SHAPE_MARGIN of one it holds, until it holds the whole train of each."""
+        b = self.bodies
+        out = seeds.copy()
+        _grow(out, np.asarray(pool, np.int64), b.positions, b.radii, b.half_heights)
+        return out
 
     def _pull_now(self, rows, positions, velocities) -> None:
         """The pull each moving body of `rows` gets from the belt under it at its velocity now —
@@ -293,6 +312,7 @@ class FreeTransport:
             # The others against the bodies awake in the engine only.
             rest = ~due
             back[rest] = self._touching(rows[rest], 1, *state, among=awake)
+        settle = None
         if due.any():
             look = rows[due]
             now = self._fields(look, b.moved_rows, b.moved_under, positions)
@@ -308,11 +328,23 @@ class FreeTransport:
                          | self._fixed_hit(look[short], 1, positions, b.velocities))
                 ok[short], still[short], near[short] = ok1, still1, near1
                 self.clear[look[short]] = tick + self.ahead[look[short]]
-            # One that stops on a still belt with nothing near rests at once, without the engine.
+            # One that stops on a still belt with nothing near rests at once, without the engine;
+            # a train rests whole or not at all (the rest of it would ride on into the part at rest).
             settle = still & ~near & self.rest.allowed[look]
             if settle.any():
-                self._settle(look[settle], now[settle])
+                resting = np.zeros(len(self.free), bool)
+                resting[look[settle]] = True
+                torn = self._trains(resting, rows) & ~resting
+                if torn.any():
+                    settle &= ~self._trains(torn, rows)[look]
             back[due] = (~ok | near) & ~settle
+        if back.any():
+            # A train comes back whole: its bottles touch, and the engine must hold both sides.
+            out = np.zeros(len(self.free), bool)
+            out[rows[back]] = True
+            back = self._trains(out, rows)[rows]
+        if settle is not None and settle.any():
+            self._settle(look[settle], now[settle])
         if back.any():
             self.release(rows[back])
 
@@ -363,7 +395,18 @@ class FreeTransport:
         # The pull each gets at the belt's new speed (a resting body's is from before it rested).
         moving = b.in_play_rows() if b.moved_rows is None else b.moved_rows
         self._pull_now(np.union1d(moving, rows), b.positions, b.velocities)
-        go = self._leaving(rows[self.allowed[rows]])[0]
+        # Standing still together, they may set off as trains (_touching): those that stay must
+        # keep their trains with them.
+        candidates = rows[self.allowed[rows]]
+        joined = self.free.copy()
+        joined[candidates] = True
+        go = self._leaving(candidates, joined=joined)[0]
+        stay = np.zeros(len(joined), bool)
+        stay[candidates] = True
+        stay[go] = False
+        stay = self._trains(stay, np.union1d(candidates, self.rows))
+        go = go[~stay[go]]
+        self.release(np.flatnonzero(stay & self.free))
         if len(go) == 0:
             return rows
         self.rest.wake(go)
@@ -390,7 +433,7 @@ class FreeTransport:
         if len(rows) == 0:
             return
         self._pull_now(b.in_play_rows() if b.moved_rows is None else b.moved_rows, b.positions, b.velocities)
-        go, near = self._leaving(rows, b.live_rows, b.under)
+        go, near = self._leaving(rows, b.live_rows, b.under)     # no trains: none of `rows` is joined
         self.next_try[near] = tick + RETRY
         if len(go) == 0:
             return
@@ -403,10 +446,10 @@ class FreeTransport:
         self.entered += len(go)
         self._changed()
 
-    def _leaving(self, rows, read_rows=None, under=None) -> tuple[np.ndarray, np.ndarray]:
+    def _leaving(self, rows, read_rows=None, under=None, joined=None) -> tuple[np.ndarray, np.ndarray]:
         """(go, near): of `rows`, those upright and steady, standing on a belt (base within SINK
         of its surface) and passing the tests `2·ahead` ticks forward; and those that ride a belt
-        but are near something."""
+        but are near something (`joined`: who may form a train, by default the free)."""
         b = self.bodies
         p, q, v, w = b.positions, b.orientations, b.velocities, b.angular_velocities
         none = rows[:0]
@@ -424,14 +467,14 @@ class FreeTransport:
         rows = rows[self._on_belt(rows, field, 2, p, v)[0]]     # twice the look-ahead, as below
         if len(rows) == 0:
             return none, none
-        near = self._touching(rows, 2, p, q, v, w)
+        near = self._touching(rows, 2, p, q, v, w, joined=joined)
         near[~near] = self._fixed_hit(rows[~near], 2, p, v)
         return rows[~near], rows[near]
 
     # --- the tick itself --------------------------------------------------------------------
-    def speed_changed(self) -> None:
-        """A belt's speed changed: the free bottles are looked at whole before the next tick (whose
-        look takes every pull afresh, at the new speed)."""
+    def look_whole(self) -> None:
+        """A belt's speed changed, or an arm let go of a bottle: the free bottles are looked at
+        whole before the next tick (whose look takes every pull afresh, at the new speed)."""
         self.due = 0
         self._everything = True
 
@@ -457,13 +500,17 @@ class FreeTransport:
         self.bodies.stale = True
 
     # --- the engine's own word, for tests -----------------------------------------------------
-    def check(self, tick: int, floors: set[int]) -> None:
+    def check(self, tick: int, floors: set[int], held=()) -> None:
         """Every free bottle at its pose, asked of the engine: a cylinder of its full radius there
-        touches no body but a floor (free bottles' engine poses are stale: they are compared with
-        each other here, as upright cylinders)."""
+        touches no body but a floor or a bottle an arm holds (`held`, rows: out of the collision
+        world while held, and looked at whole when let go of). Free bottles' engine poses are
+        stale: they are compared with each other here, as upright cylinders; two may touch only
+        as a train does — they touched when they went free, at one velocity, and are no deeper
+        into each other than then."""
         b, client = self.bodies, self.engine.client
         rows = self.rows.tolist()
-        skip = floors | {b.ids[n] for n in rows}
+        skip = floors | {b.ids[n] for n in rows} | {b.ids[n] for n in held}
+        trains = {}
         for n in rows:
             at, orientation = b.positions[n].tolist(), b.orientations[n].tolist()
             half = boxes(b.orientations[[n]], b.radii[[n]], b.half_heights[[n]])[0]
@@ -479,9 +526,15 @@ class FreeTransport:
                                        f"at {tuple(round(float(c), 4) for c in touch[0][5])}")
             for m in rows:
                 apart = b.positions[m] - b.positions[n]
-                if (m != n and np.hypot(apart[0], apart[1]) < b.radii[m] + b.radii[n]
-                        and abs(apart[2]) < b.half_heights[m] + b.half_heights[n]):
-                    raise RuntimeError(f"tick {tick}: free bottles {b.labels[n]} and {b.labels[m]} touch")
+                depth = b.radii[m] + b.radii[n] - np.hypot(apart[0], apart[1])
+                if m > n and depth > 0.0 and abs(apart[2]) < b.half_heights[m] + b.half_heights[n]:
+                    # Only a train's: at one velocity, bit for bit, touching since both went free, no deeper.
+                    was = self._trains_seen.get((n, m))
+                    if not (b.velocities[m, :2] == b.velocities[n, :2]).all() or (
+                            was is None and {n, m} <= self._checked) or depth > (was if was is not None else depth) + 1e-9:
+                        raise RuntimeError(f"tick {tick}: free bottles {b.labels[n]} and {b.labels[m]} touch")
+                    trains[(n, m)] = depth if was is None else was
+        self._trains_seen, self._checked = trains, set(rows)
 
     def _probe(self, n: int) -> int:
         """A collision shape standing for bottle `n` in `check` (made once, outside the world)."""
@@ -496,7 +549,7 @@ class FreeTransport:
 
 @njit(cache=True)
 def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, pair_row, pair_box,
-               c, h, cos, sin, centres, reach):
+               c, h, cos, sin):
     """FreeTransport._fixed_hit after the listing, row by row and pair by pair."""
     hit = np.zeros(rows.shape[0], np.bool_)
     mine = np.zeros(ahead.shape[0], np.int64)
@@ -505,7 +558,7 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
     # Per row: its way at its velocity (wx, wy), the pull's way along it (gx, gy) and the widening across.
     wx, wy = np.empty(rows.shape[0]), np.empty(rows.shape[0])
     gx, gy = np.empty(rows.shape[0]), np.empty(rows.shape[0])
-    widen, length = np.empty(rows.shape[0]), np.empty(rows.shape[0])
+    widen = np.empty(rows.shape[0])
     for i in range(rows.shape[0]):
         n_ = rows[i]
         n = ahead[n_] * times
@@ -522,7 +575,6 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
         wx[i], wy[i] = vx * n * dt, vy * n * dt
         gx[i], gy[i] = ux * along, uy * along
         widen[i] = across + FIXED_MARGIN
-        length[i] = speed * n * dt + abs(along)
     for q in range(pair_row.shape[0]):
         i = mine[pair_row[q]] - 1
         if i < 0 or hit[i]:
@@ -539,13 +591,6 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
                   _segment_gap(a0 + d0, a1 + d1, e0, e1, h[k, 0], h[k, 1]))
         if gap < radii[n_] + widen[i]:
             hit[i] = True
-    for i in range(rows.shape[0]):
-        n_ = rows[i]
-        for m in range(reach.shape[0]):
-            d = math.sqrt((positions[n_, 0] - centres[m, 0]) ** 2 + (positions[n_, 1] - centres[m, 1]) ** 2
-                          + (positions[n_, 2] - centres[m, 2]) ** 2) - reach[m]
-            if d < radii[n_] + length[i] + widen[i]:
-                hit[i] = True
     return hit
 
 
@@ -657,11 +702,13 @@ def _box_distance(x, y, hx, hy):
 
 @njit(cache=True)
 def _touching(rows, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most,
-              pulls, free, straight_law, regions, part_centres, part_extents):
+              pulls, free, joined, against, straight_law, regions, part_centres, part_extents):
     """FreeTransport._touching: whether each of `rows` could touch a body of `play` (sorted, holds
-    `rows`) or a moving part's box (part_centres, part_extents); `straight_law` per field: straight, its law scaled by the mass;
-    `regions`: ForceFields.regions. Pairs by their bounds (rest.bound), found along
-    the plant's longer axis from each row outwards, then as FreeTransport._touching says."""
+    `rows`) that is one of `against` (a mask over bodies) or a moving part's box (part_centres,
+    part_extents); `joined`: the bodies that may form a train; `straight_law` per field:
+    straight, its law scaled by the mass; `regions`: ForceFields.regions. Pairs by their bounds
+    (rest.bound), found along the plant's longer axis from each row outwards, then as
+    FreeTransport._touching says."""
     count = play.shape[0]
     reaches = np.empty(count)
     steady = np.empty(count, np.bool_)
@@ -710,19 +757,23 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
                     break
                 t += step
                 na, no, reach = play[a], play[o], reaches[a] + reaches[o]
+                if not against[no]:
+                    continue
                 if (abs(positions[na, 0] - positions[no, 0]) >= reach or abs(positions[na, 1] - positions[no, 1]) >= reach
                         or abs(positions[na, 2] - positions[no, 2]) >= reach):
                     continue      # their bounds do not meet
                 if _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights,
-                         ahead, most, pulls, belt, farthest, straight_law, regions, reaches, steady):
+                         ahead, most, pulls, belt, farthest, straight_law, regions, reaches, steady, joined):
                     touching[i] = True
     return touching
 
 
 @njit(cache=True)
 def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most, pulls,
-          belt, farthest, straight_law, regions, reaches, steady):
-    """Whether bodies play[a] and play[o] could touch within the look (FreeTransport._touching)."""
+          belt, farthest, straight_law, regions, reaches, steady, joined):
+    """Whether bodies play[a] and play[o] could touch within the look (FreeTransport._touching);
+    not when they are a train: both joined, on one straight belt whose law scales with the mass
+    and staying on it, at the same velocity and not turning — the law moves them alike."""
     na, no = play[a], play[o]       # their bounds meet (the caller tested them)
     if steady[a] and steady[o]:
         n = max(ahead[na], ahead[no]) * times
@@ -735,9 +786,12 @@ def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, rad
         for q in (a, o):
             if belt[q] == -2:
                 belt[q] = _belt(play[q], farthest, dt, positions, velocities, pulls, straight_law, regions)
-        if not (belt[a] >= 0 and belt[a] == belt[o]):
+        one_belt = belt[a] >= 0 and belt[a] == belt[o]
+        if not one_belt:
             way += (most[na] + most[no]) * n * (n + 1.0) / 2.0 * dt   # the most each may be pulled (_pull_now)
-        return math.hypot(ax, ay) - radii[na] - radii[no] - 2.0 * SHAPE_MARGIN < way
+        if math.hypot(ax, ay) - radii[na] - radii[no] - 2.0 * SHAPE_MARGIN >= way:
+            return False
+        return not (one_belt and way == 0.0 and joined[na] and joined[no])
     ka, ko = ahead[na] * times, ahead[no] * times
     for c in range(3):
         # The wake rule's boxes without the contact breaking threshold (a free bottle is in no island
@@ -768,3 +822,18 @@ def _belt(n, m, dt, positions, velocities, pulls, straight_law, regions):
         if field_at(x + cx, y + cy, z, *regions) != now:
             return -1
     return now
+
+
+@njit(cache=True)
+def _grow(out, pool, positions, radii, half_heights):
+    """FreeTransport._trains: `out` grown in place by the bodies of `pool` within 2·SHAPE_MARGIN
+    of one it holds (upright footprints, overlapping in height), theirs in turn."""
+    stack = [n for n in pool if out[n]]
+    while stack:
+        n = stack.pop()
+        for m in pool:
+            if (not out[m] and abs(positions[n, 2] - positions[m, 2]) < half_heights[n] + half_heights[m]
+                    and math.hypot(positions[n, 0] - positions[m, 0], positions[n, 1] - positions[m, 1])
+                    - radii[n] - radii[m] < 2.0 * SHAPE_MARGIN):
+                out[m] = True
+                stack.append(m)

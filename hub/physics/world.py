@@ -207,7 +207,7 @@ class PhysicsWorld:
             return
         self.watch.belt_speed(speed)
         self.fields.set_speed(field, speed)
-        self.transport.speed_changed()
+        self.transport.look_whole()
         if self.rest.resting.any():
             rows = self.rest.on_field(field, self.bodies.positions)
             if self.transport.enabled and len(rows):
@@ -278,6 +278,7 @@ class PhysicsWorld:
 
     def release(self, arm: KinematicArm) -> None:
         self.robots.release(arm)
+        self.transport.look_whole()   # the bottle let go of collides from the next tick on
 
     def belts_under(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Read-only, for statistics beside the loop (modules/plant/jams.py): the bodies in play
@@ -301,7 +302,7 @@ class PhysicsWorld:
             b.started = True
             self.engine.build_supports()
             if self.transport.enabled:
-                self.transport.arm(self._fixed_boxes(), self._arm_spheres(), self.moving)
+                self.transport.arm(self._fixed_boxes(), self.moving)
             b.read(self.fields)
             self.check_start()
             self.triggers.evaluate(self.tick, b.positions, b.radii, b.half_heights)
@@ -313,7 +314,7 @@ class PhysicsWorld:
         return [(c, h, y) for body, c, h, y in self.engine.static if body not in floors] + self.parts.boxes
 
     def _arm_spheres(self) -> list[tuple]:
-        """Where each robot arm can reach (centre, radius): no bottle rides free there."""
+        """Where each robot arm can reach (centre, radius): where it may put a bottle down."""
         return [(arm.base + SHOULDER, REACH + arm.tool_length) for arm in self.robots.arms]
 
     def check_start(self) -> None:
@@ -385,7 +386,7 @@ class PhysicsWorld:
             if self.check_rest:
                 sleep.check(self.tick, self.parts.bodies())
             if self.check_free:
-                transport.check(self.tick, self.engine.floors)
+                transport.check(self.tick, self.engine.floors, arms.held_rows())
             if self.tick % rest.every == 0 and rest.enabled:
                 sleep.settle(self.fields, arms.held_rows(), moving)
             if free and self.tick % transport.every == 0:
