@@ -46,8 +46,6 @@ class Bodies:
         self.moved_rows = None        # rows whose state changes per tick: read or in free transport (None: every body)
         self.free = None              # per body: in free transport, moved by the hub (transport.py), not read
         self.under = None             # the field under each live row at the last read (−1: none)
-        self.moved_under = None       # the same for each of moved_rows
-        self._live_in_moved = None    # which of moved_rows are live (None: all)
         # The rows the last read took that are in play, as one (n, 13) block, and which rows they
         # are (None: every body): what the watch tests, without indexing the state again.
         self.fresh = np.zeros((0, 13))
@@ -108,9 +106,9 @@ class Bodies:
                 self.fresh_rows = rows
         else:
             self.fresh, self.fresh_rows = np.zeros((0, 13)), None
-        # The field under every body that moves, once; the live rows' part of it for the rest rule.
-        self.moved_under = self.fields_under(fields, self.moved_rows)
-        self.under = self.moved_under if self._live_in_moved is None else self.moved_under[self._live_in_moved]
+        # The field under every body read, once, for the belts' forces and the rest rule (free
+        # transport looks its bottles' up itself).
+        self.under = self.fields_under(fields, self.live_rows)
 
     def refresh(self) -> None:
         """Work out the bodies in play and those read per tick after a park, unpark, rest or wake."""
@@ -121,16 +119,15 @@ class Bodies:
         self.play_rows = None if play.all() else np.flatnonzero(play)
         self.moved_rows = None if moved.all() else np.flatnonzero(moved)
         self.live_rows = None if live.all() else np.flatnonzero(live)
-        self._live_in_moved = None if self.free is None or not self.free.any() else ~self.free[moved]
         self.live_ids = [] if self.live_rows is None else [self.ids[n] for n in self.live_rows.tolist()]
         self.stale = False
-        self.under = self.moved_under = None
+        self.under = None
 
     def moved(self) -> None:
         """A body was put somewhere by the plant (parked, unparked): read every body next tick."""
         self.full_read = True
         self.stale = True
-        self.under = self.moved_under = None
+        self.under = None
 
     def fields_under(self, fields, rows) -> np.ndarray:
         return fields.which(self.positions if rows is None else self.positions[rows])

@@ -117,8 +117,8 @@ class Bottles:
             yield self.base_bodies[body], -float(self.bodies.half_heights[body])
 
     def drive(self, fields) -> None:
-        """Apply every belt's force for this tick where it grips each bottle on a belt, and hand
-        the bottles in free transport their velocity change by the same law (transport.py).
+        """Apply every belt's force for this tick where it grips each bottle on a belt in the
+        engine (free transport moves its bottles by the same law itself: transport.py).
 
         A bottle is on a belt when its centre of mass is over it; only then is its grip point
         worked out (its base, or its second body's state read), so a bottle off every belt
@@ -127,8 +127,8 @@ class Bottles:
         b = self.bodies
         if b.stale:
             b.refresh()
-        rows = b.moved_rows          # parked and resting bodies are not even looked for
-        field = b.moved_under if b.moved_under is not None else b.fields_under(fields, rows)
+        rows = b.live_rows           # parked, resting and free bodies are not even looked for
+        field = b.under if b.under is not None else b.fields_under(fields, rows)
         if rows is None:
             bodies = np.flatnonzero(field >= 0)
             f = field[bodies]
@@ -159,21 +159,16 @@ class Bottles:
                     # The paper's model: the field sees the second body's own position and velocity.
                     points[row] = pybullet.getBasePositionAndOrientation(second, client)[0]
                     velocities[row] = pybullet.getBaseVelocity(second, client)[0]
-        transport = self.transport
-        free = transport.free[bodies] if len(transport.rows) else np.zeros(len(bodies), bool)
-        free_at, dvx, dvy, engine_at, fx, fy, torques = fields.drive(
-            f, points, velocities, b.masses[bodies], b.radii[bodies], b.angular_velocities[bodies, 2], free)
-        if len(free_at):
-            transport.hand(bodies[free_at], dvx, dvy)
-        engine = bodies[engine_at]
+        fx, fy, torques = fields.drive(f, points, velocities, b.masses[bodies], b.radii[bodies],
+                                       b.angular_velocities[bodies, 2])
         # A world-frame force acts at `at`: the centre of mass adds no torque, the base does.
         # Positional arguments: keywords cost pybullet's argument parser a tenth of the call.
         apply, frame = pybullet.applyExternalForce, pybullet.WORLD_FRAME
-        for target, x, y, at in zip(targets[engine].tolist(), fx.tolist(), fy.tolist(), points[engine_at].tolist()):
+        for target, x, y, at in zip(targets[bodies].tolist(), fx.tolist(), fy.tolist(), points.tolist()):
             apply(target, -1, (x, y, 0.0), at, frame, client)
         # The surface also grips the base against spinning; only bottles that spin get a call.
         spinning = np.flatnonzero(torques)
         if len(spinning):
             twist = pybullet.applyExternalTorque
-            for target, torque in zip(ids[engine[spinning]].tolist(), torques[spinning].tolist()):
+            for target, torque in zip(ids[bodies[spinning]].tolist(), torques[spinning].tolist()):
                 twist(target, -1, (0.0, 0.0, torque), frame, client)

@@ -163,15 +163,12 @@ class ForceFields:
                         np.ascontiguousarray(velocities, float), np.ascontiguousarray(masses, float), *self.laws())
 
     def drive(self, f: np.ndarray, points: np.ndarray, velocities: np.ndarray, masses: np.ndarray,
-              radii: np.ndarray, spins: np.ndarray, free: np.ndarray) -> tuple:
-        """A tick's drive of M bodies on the fields `f` (Bottles.drive), split in one compiled
-        loop: (free_at, dvx, dvy) for those with `free` set — their velocity changes, which free
-        transport adds itself — and (engine_at, fx, fy, torques) for the others — the forces
-        (`forces_at`) and spin torques (`spin_torques`) the engine applies. `*_at` index the M."""
+              radii: np.ndarray, spins: np.ndarray) -> tuple:
+        """A tick's drive of M bodies on the fields `f` (Bottles.drive) in one compiled loop:
+        (fx, fy, torques), the forces of `forces_at` and the torques of `spin_torques`."""
         return _drive(np.asarray(f, np.int64), np.ascontiguousarray(points, float),
                       np.ascontiguousarray(velocities, float), np.ascontiguousarray(masses, float),
-                      np.ascontiguousarray(radii, float), np.ascontiguousarray(spins, float),
-                      np.asarray(free, np.bool_), *self.laws())
+                      np.ascontiguousarray(radii, float), np.ascontiguousarray(spins, float), *self.laws())
 
     def laws(self) -> tuple:
         """The belts' laws as compiled loops take them (`law_at`)."""
@@ -245,29 +242,18 @@ def _changes(f, points, velocities, masses, dt, explicit, rates, per_mass, speed
 
 
 @njit(cache=True)
-def _drive(f, points, velocities, masses, radii, spins, free, dt, explicit, rates, per_mass, speeds, surface, limits,
+def _drive(f, points, velocities, masses, radii, spins, dt, explicit, rates, per_mass, speeds, surface, limits,
            is_arc, origin, cos, sin, turn, radius):
     """ForceFields.drive, body by body."""
     n = f.shape[0]
-    count = 0
-    for i in range(n):
-        count += free[i]
-    free_at, dvx, dvy = np.empty(count, np.int64), np.empty(count), np.empty(count)
-    engine_at, fx, fy, torques = np.empty(n - count, np.int64), np.empty(n - count), np.empty(n - count), np.empty(n - count)
-    j = e = 0
+    fx, fy, torques = np.empty(n), np.empty(n), np.empty(n)
     for i in range(n):
         x, y = law_at(f[i], points[i, 0], points[i, 1], velocities[i, 0], velocities[i, 1], masses[i], dt, explicit,
                       rates, per_mass, speeds, surface, limits, is_arc, origin, cos, sin, turn, radius)
-        if free[i]:
-            free_at[j], dvx[j], dvy[j] = i, x, y
-            j += 1
-        else:
-            per_second = masses[i] / dt
-            engine_at[e], fx[e], fy[e] = i, x * per_second, y * per_second
-            torques[e] = spin_torque_at(f[i], spins[i], masses[i], radii[i], dt, explicit, rates, per_mass, surface,
-                                        limits)
-            e += 1
-    return free_at, dvx, dvy, engine_at, fx, fy, torques
+        per_second = masses[i] / dt
+        fx[i], fy[i] = x * per_second, y * per_second
+        torques[i] = spin_torque_at(f[i], spins[i], masses[i], radii[i], dt, explicit, rates, per_mass, surface, limits)
+    return fx, fy, torques
 
 
 @njit(cache=True)

@@ -103,7 +103,6 @@ class FreeTransport:
         self.rows = np.zeros(0, int)        # the free rows, in body order
         self.pulls = np.zeros((0, 2))       # per body: the velocity change its belt gives it now (x, y), m/s (_pull_now)
         self.most = np.zeros(0)            # per body: the most its belts may pull it over a look, m/s (_pull_now)
-        self._handed = None                 # this tick's (rows, dvx, dvy) from Bottles.drive
         self.due = 0                        # the tick at which the free bottles are looked at next
         self.clear = np.zeros(0, int)       # per body: the tick up to which its last whole look holds
         self._everything = False            # every free bottle is looked at whole next time (a belt's speed changed)
@@ -114,6 +113,7 @@ class FreeTransport:
         self.stopped = 0                    # and a free one came to rest without the engine (_settle)
         self._fixed = None                  # (centres, half extents, cos, sin) of fixed boxes
         self._moving = None                 # MovingParts, tested at every look (their boxes move)
+        self.offsets = np.zeros(0)          # per body: where a belt grips it, its centre's height over that (arm)
         self._parts_at_rest = None          # their boxes while none moves
         self._probes: dict[int, int] = {}   # body row → collision shape, for `check`
         self._trains_seen: dict = {}        # for `check`: free pairs that touch (a train's), their depth when first seen
@@ -132,9 +132,11 @@ class FreeTransport:
         self.next_try = np.append(self.next_try, 0)
         self.clear = np.append(self.clear, 0)
 
-    def arm(self, fixed_boxes, moving) -> None:
+    def arm(self, fixed_boxes, moving, offsets: dict) -> None:
         """At the start: the fixed geometry a free bottle keeps clear of — boxes (centre, half
-        extents, yaw) of rails, walls, gates and blades, not the floors — and the moving parts.
+        extents, yaw) of rails, walls, gates and blades, not the floors — the moving parts, and
+        where a belt grips each bottle (`offsets`, row → its centre's height over the base, for
+        `grip_at: base`; Bottles.base_offsets).
         A robot arm has no collision shapes, and the bottle it carries none while it is held:
         the bottle it lets go of is an awake body like any other, looked at whole against every
         free bottle before the next tick (`look_whole`)."""
@@ -144,6 +146,9 @@ class FreeTransport:
             yaw = np.array([b[2] for b in fixed_boxes], float)
             self._fixed = (c, h, np.cos(yaw), np.sin(yaw))
         self._moving = moving
+        self.offsets = np.zeros(len(self.free))
+        for row, offset in offsets.items():
+            self.offsets[row] = offset
 
     # --- the tests ------------------------------------------------------------------------
     def _list(self, rows, positions) -> None:
@@ -315,7 +320,7 @@ class FreeTransport:
         settle = None
         if due.any():
             look = rows[due]
-            now = self._fields(look, b.moved_rows, b.moved_under, positions)
+            now = self.fields.which(positions[look])
             # LONG looks ahead first; what that finds near is looked at one look-ahead forward.
             ok, still, stays = self._on_belt(look, now, LONG, positions, b.velocities)
             near = self._touching(look, LONG, *state) | self._fixed_hit(look, LONG, positions, b.velocities)
@@ -478,21 +483,18 @@ class FreeTransport:
         self.due = 0
         self._everything = True
 
-    def hand(self, rows, dvx, dvy) -> None:
-        """Before the engine's step: the velocity changes the belts' law gives the free `rows` on
-        a belt this tick (Bottles.drive works them out with the engine-driven bottles', in one go)."""
-        self._handed = (rows, dvx, dvy)
-
     def advance(self) -> None:
-        """After the engine's step: every free bottle one tick on — the velocity change it was
-        handed, then x ← x + v·dt, as the engine integrates — in one compiled loop."""
+        """After the engine's step: every free bottle one tick on — the velocity change the law
+        of the belt under it gives it, where the engine would have it gripped (its centre, or its
+        base for `grip_at: base`, as Bottles.drive takes it), then x ← x + v·dt, as the engine
+        integrates — in one compiled loop, from the state the tick began with (the engine's
+        step changes nothing of a free bottle's)."""
         rows = self.rows
         if len(rows) == 0:
             return
         b = self.bodies
-        handed, self._handed = self._handed, None
-        on, dvx, dvy = handed if handed is not None else (rows[:0], np.zeros(0), np.zeros(0))
-        _advance(rows, on, dvx, dvy, b.positions, b.velocities, self.dt)
+        _advance(rows, b.positions, b.orientations, b.velocities, b.masses, self.offsets, *self.fields.regions(),
+                 *self.fields.laws())
 
     def _changed(self) -> None:
         self.rows = np.flatnonzero(self.free)
@@ -643,15 +645,25 @@ def _pulls(rows, positions, velocities, masses, ahead, dt, pulls, most, regions,
 
 
 @njit(cache=True)
-def _advance(rows, on, dvx, dvy, positions, velocities, dt):
-    """FreeTransport.advance: the velocity changes handed to `on` (a subset of `rows`, both in
-    body order), then every row's x ← x + v·dt."""
-    j = 0
+def _advance(rows, positions, orientations, velocities, masses, offsets, origin, cos, sin, is_arc, turn, radius, angle0,
+             length, half_width, z_lo, z_hi, dt, explicit, rates, per_mass, speeds, surface, limits, l_is_arc, l_origin,
+             l_cos, l_sin, l_turn, l_radius):
+    """FreeTransport.advance, row by row: the field under its centre (`field_at`), the law's
+    change at its grip point (`law_at`: its base is frames.base_points' with no spin), then
+    x ← x + v·dt."""
     for n in rows:
-        if j < on.shape[0] and on[j] == n:
-            velocities[n, 0] += dvx[j]
-            velocities[n, 1] += dvy[j]
-            j += 1
+        k = field_at(positions[n, 0], positions[n, 1], positions[n, 2], origin, cos, sin, is_arc, turn, radius,
+                     angle0, length, half_width, z_lo, z_hi)
+        if k >= 0:
+            px, py = positions[n, 0], positions[n, 1]
+            if offsets[n] > 0.0:
+                x, y, z, w = orientations[n, 0], orientations[n, 1], orientations[n, 2], orientations[n, 3]
+                px += -offsets[n] * (2.0 * (x * z + w * y))
+                py += -offsets[n] * (2.0 * (y * z - w * x))
+            dvx, dvy = law_at(k, px, py, velocities[n, 0], velocities[n, 1], masses[n], dt, explicit, rates, per_mass,
+                              speeds, surface, limits, l_is_arc, l_origin, l_cos, l_sin, l_turn, l_radius)
+            velocities[n, 0] += dvx
+            velocities[n, 1] += dvy
         positions[n, 0] += velocities[n, 0] * dt
         positions[n, 1] += velocities[n, 1] * dt
 

@@ -302,7 +302,7 @@ class PhysicsWorld:
             b.started = True
             self.engine.build_supports()
             if self.transport.enabled:
-                self.transport.arm(self._fixed_boxes(), self.moving)
+                self.transport.arm(self._fixed_boxes(), self.moving, self.bottles.base_offsets)
             b.read(self.fields)
             self.check_start()
             self.triggers.evaluate(self.tick, b.positions, b.radii, b.half_heights)
