@@ -160,26 +160,19 @@ class Rest:
         return boxes(orientations[rows], self.radii[rows], self.half_heights[rows], velocities[rows], spins[rows],
                      self.dt)
 
-    def candidates(self, rows: np.ndarray, velocities: np.ndarray, spins: np.ndarray, undriven: np.ndarray,
-                   held: np.ndarray | None = None) -> np.ndarray:
-        """A look at the awake `rows` (`undriven`: nothing drives them; `held`: a running belt
-        does, and they stand still against it), one every `every` ticks: a body still at this
-        look counts `every` more still ticks, one that moves starts from zero. The rows that
-        have now been still long enough to rest: `after`, or `held_after` when held."""
-        v, w = velocities[rows], spins[rows]
-        may = undriven if held is None else undriven | held
-        still = (may & self.allowed[rows]
-                 & ((v * v).sum(axis=1) < self._speed2) & ((w * w).sum(axis=1) < self._spin2))
-        counts = np.where(still, self.still[rows] + self.every, 0)
-        self.still[rows] = counts
-        need = self.ticks if held is None else np.where(undriven, self.ticks, self.held_ticks)
-        due = counts >= need
-        # All that are due go together (a queue whose bottles came to rest a tick apart rests as
-        # one group), when one has just become due or one left awake is due to try again.
-        over = counts[due] - (need if np.isscalar(need) else need[due])
-        if not (over % self.retry < self.every).any():
-            return rows[:0]
-        return rows[due]
+    def candidates(self, rows: np.ndarray, field: np.ndarray, speeds: np.ndarray, gripped: np.ndarray,
+                   velocities: np.ndarray, spins: np.ndarray) -> np.ndarray:
+        """A look at the awake `rows` (`field`: the belt under each, −1 none; `speeds`: the
+        belts'; `gripped`: per body, held by an arm, never resting), one every `every` ticks: a
+        body still at this look counts `every` more still ticks, one that moves starts from
+        zero. The rows that have now been still long enough to rest: `after` where nothing
+        drives them (no belt, or one standing still), `held_after` held still against a running
+        belt. All that are due go together (a queue whose bottles came to rest a tick apart rests
+        as one group), when one has just become due or one left awake is due to try again. One
+        compiled loop (`_candidates`)."""
+        return _candidates(np.asarray(rows, np.int64), np.asarray(field, np.int64), speeds, gripped, velocities,
+                           spins, self.allowed, self.still, self.every, self.ticks, self.held_ticks, self.retry,
+                           self._speed2, self._spin2)
 
     def settle(self, candidates: np.ndarray, awake: np.ndarray, positions, orientations, velocities,
                spins) -> np.ndarray:
@@ -261,6 +254,28 @@ class Rest:
             self._at_rest = None
         self.resting[row] = False
         self.still[row] = 0
+
+
+@njit(cache=True)
+def _candidates(rows, field, speeds, gripped, velocities, spins, allowed, still, every, ticks, held_ticks, retry,
+                speed2, spin2):
+    """Rest.candidates, row by row (`still` counted in place)."""
+    due = np.zeros(rows.shape[0], np.bool_)
+    fresh = False
+    for i in range(rows.shape[0]):
+        n, k = rows[i], field[i]
+        undriven = k < 0 or speeds[k] == 0.0
+        v, w = velocities[n], spins[n]
+        count = 0
+        if (not gripped[n] and allowed[n] and v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < speed2
+                and w[0] * w[0] + w[1] * w[1] + w[2] * w[2] < spin2):
+            count = still[n] + every
+        still[n] = count
+        need = ticks if undriven else held_ticks
+        if count >= need:
+            due[i] = True
+            fresh = fresh or (count - need) % retry < every
+    return rows[due] if fresh else rows[:0]
 
 
 @njit(cache=True)

@@ -29,19 +29,11 @@ class Sleep:
         if len(rows) == 0:
             return
         field = b.under
-        undriven = field < 0
-        pressed = None
-        if len(fields):
-            standing = fields.speeds[field] == 0.0
-            pressed = ~undriven & ~standing      # on a running belt: rests only if held still against it
-            undriven |= standing
+        gripped = np.zeros(len(rest.allowed), bool)
         if held:
-            gripped = np.isin(rows, held)
-            undriven &= ~gripped
-            if pressed is not None:
-                pressed &= ~gripped
+            gripped[held] = True
         state = b.positions, b.orientations, b.velocities, b.angular_velocities
-        candidates = rest.candidates(rows, state[2], state[3], undriven, pressed)
+        candidates = rest.candidates(rows, field, fields.speeds, gripped, state[2], state[3])
         if len(candidates):
             candidates = rest.settle(candidates, rows, *state)
         if len(candidates) and moving.moving:

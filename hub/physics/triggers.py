@@ -74,26 +74,24 @@ class VolumeTriggers:
         Runs at every tick: the test is one compiled loop over (triggers, bodies) (`_overlap`)."""
         if len(self) == 0:
             return False
-        if moved is not None and not self.shifted and self._inside.shape == (len(self), len(positions)):
-            # The common tick: only the bodies that moved, compared and latched in one compiled loop.
+        if moved is not None and self._inside.shape == (len(self), len(positions)):
+            # The common tick: only the bodies that moved, compared and latched in one compiled loop;
+            # a box that moved (with an arm's tool) against every body in play.
             b = self.boxes
-            changes = _moved(self._inside, self._stayed, np.asarray(moved, np.int64), positions, radii, half_heights,
-                             b.centers, b.half_extents, b.cos, b.sin)
+            shifted = np.zeros(len(self), np.bool_)
+            if self.shifted:
+                shifted[sorted(self.shifted)] = True
+                self.shifted.clear()
+            every = np.arange(len(positions)) if rows is None else np.asarray(rows, np.int64)
+            changes = _moved(self._inside, self._stayed, np.asarray(moved, np.int64), every, shifted, positions, radii,
+                             half_heights, b.centers, b.half_extents, b.cos, b.sin)
             if len(changes) == 0:
                 return False
             self._occupants = None
             for t, n, entered in changes.tolist():
                 (self.latches[t].entered if entered else self.latches[t].left).append((tick, n))
             return True
-        if moved is not None and self._inside.shape == (len(self), len(positions)):
-            inside = self._inside.copy()
-            inside[:, moved] = self._test(positions[moved], radii[moved], half_heights[moved])
-            if self.shifted:   # a box that moved (with an arm's tool) tests every body in play
-                shifted = sorted(self.shifted)
-                every = slice(None) if rows is None else rows
-                inside[np.ix_(shifted, np.arange(len(positions))[every])] = self._test(
-                    positions[every], radii[every], half_heights[every], shifted)
-        elif rows is not None:
+        if rows is not None:
             inside = np.zeros((len(self), len(positions)), bool)
             inside[:, rows] = self._test(positions[rows], radii[rows], half_heights[rows])
         else:
@@ -116,12 +114,11 @@ class VolumeTriggers:
             self.latches[t].left.append((tick, int(n)))
         return True
 
-    def _test(self, positions, radii, half_heights, boxes=None) -> np.ndarray:
-        """(triggers, bodies): whether each upright cylinder overlaps each box (or those of `boxes`)."""
+    def _test(self, positions, radii, half_heights) -> np.ndarray:
+        """(triggers, bodies): whether each upright cylinder overlaps each box."""
         b = self.boxes
-        which = np.arange(len(b)) if boxes is None else np.asarray(boxes, np.int64)
         return _overlap(np.ascontiguousarray(positions, float), np.ascontiguousarray(radii, float),
-                        np.ascontiguousarray(half_heights, float), which, b.centers, b.half_extents, b.cos, b.sin)
+                        np.ascontiguousarray(half_heights, float), b.centers, b.half_extents, b.cos, b.sin)
 
     def occupied(self) -> np.ndarray:
         """Per trigger: whether a body is inside at the last evaluation."""
@@ -151,15 +148,14 @@ class VolumeTriggers:
 
 
 @njit(cache=True)
-def _overlap(positions, radii, half_heights, boxes, centers, half_extents, cos, sin):
-    """(len(boxes), bodies): whether each upright cylinder (centre, radius, half height) overlaps
-    each of the yawed `boxes` (`_inside`)."""
-    out = np.zeros((boxes.shape[0], positions.shape[0]), np.bool_)
-    for t in range(boxes.shape[0]):
-        k = boxes[t]
-        cx, cy, cz = centers[k, 0], centers[k, 1], centers[k, 2]
-        hx, hy, hz = half_extents[k, 0], half_extents[k, 1], half_extents[k, 2]
-        c, s = cos[k], sin[k]
+def _overlap(positions, radii, half_heights, centers, half_extents, cos, sin):
+    """(boxes, bodies): whether each upright cylinder (centre, radius, half height) overlaps each
+    yawed box (`_inside`)."""
+    out = np.zeros((centers.shape[0], positions.shape[0]), np.bool_)
+    for t in range(centers.shape[0]):
+        cx, cy, cz = centers[t, 0], centers[t, 1], centers[t, 2]
+        hx, hy, hz = half_extents[t, 0], half_extents[t, 1], half_extents[t, 2]
+        c, s = cos[t], sin[t]
         for n in range(positions.shape[0]):
             out[t, n] = _inside(positions[n, 0], positions[n, 1], positions[n, 2], radii[n], half_heights[n],
                                 cx, cy, cz, hx, hy, hz, c, s)
@@ -178,18 +174,18 @@ def _inside(px, py, pz, r, h, cx, cy, cz, hx, hy, hz, c, s):
 
 
 @njit(cache=True)
-def _moved(inside, stayed, moved, positions, radii, half_heights, centers, half_extents, cos, sin):
+def _moved(inside, stayed, moved, every, shifted, positions, radii, half_heights, centers, half_extents, cos, sin):
     """One tick's occupancy in place: each trigger against the `moved` bodies (the others keep
-    theirs), then whether anything is inside it now (`stayed`). The changes, (trigger, body,
-    entered) each, trigger by trigger and within one the bodies that entered in body order, then
-    those that left."""
+    theirs), or, if it was `shifted`, against `every` body in play; then whether anything is
+    inside it now (`stayed`). The changes, (trigger, body, entered) each, trigger by trigger and
+    within one the bodies that entered in body order, then those that left."""
     changes = []
     for t in range(inside.shape[0]):
         cx, cy, cz = centers[t, 0], centers[t, 1], centers[t, 2]
         hx, hy, hz = half_extents[t, 0], half_extents[t, 1], half_extents[t, 2]
         c, s = cos[t], sin[t]
         left = []
-        for n in moved:
+        for n in (every if shifted[t] else moved):
             now = _inside(positions[n, 0], positions[n, 1], positions[n, 2], radii[n], half_heights[n],
                           cx, cy, cz, hx, hy, hz, c, s)
             if now != inside[t, n]:
