@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
 from hub.core.component import Component
 from hub.physics.frames import Boxes
@@ -52,14 +53,32 @@ def depths(boxes: Boxes, positions: np.ndarray, radii: np.ndarray, half_heights:
     not touch; −inf: it is above or below the box).
 
     In each box's frame: r minus the horizontal distance from the axis to the box, or, with the
-    axis inside the box, r plus the distance to the nearest side face."""
-    local = boxes.local(positions)
-    e = boxes.half_extents[:, None, :]
-    outside = np.maximum(np.abs(local[..., :2]) - e[..., :2], 0.0)
-    inside = np.min(e[..., :2] - np.abs(local[..., :2]), axis=-1)
-    depth = np.where(inside > 0, radii[None, :] + inside, radii[None, :] - np.hypot(outside[..., 0], outside[..., 1]))
-    level = np.abs(local[..., 2]) <= e[..., 2] + half_heights[None, :]
-    return np.where(level, depth, -math.inf)
+    axis inside the box, r plus the distance to the nearest side face. One compiled loop: the
+    gates test at communication points and the jam watch at its looks, where numpy's overhead
+    per call on a few boxes and bottles was the cost (~100 µs a look in the bottling plant)."""
+    return _depths(np.ascontiguousarray(positions, float), np.ascontiguousarray(radii, float),
+                   np.ascontiguousarray(half_heights, float), boxes.centers, boxes.half_extents, boxes.cos, boxes.sin)
+
+
+@njit(cache=True)
+def _depths(positions, radii, half_heights, centers, half_extents, cos, sin):
+    """`depths`, box by box and body by body."""
+    out = np.empty((centers.shape[0], positions.shape[0]))
+    for k in range(centers.shape[0]):
+        c, s = cos[k], sin[k]
+        ex, ey, ez = half_extents[k, 0], half_extents[k, 1], half_extents[k, 2]
+        for n in range(positions.shape[0]):
+            dx, dy, dz = positions[n, 0] - centers[k, 0], positions[n, 1] - centers[k, 1], positions[n, 2] - centers[k, 2]
+            x, y = c * dx + s * dy, -s * dx + c * dy
+            if abs(dz) > ez + half_heights[n]:
+                out[k, n] = -math.inf
+                continue
+            inside = min(ex - abs(x), ey - abs(y))
+            if inside > 0:
+                out[k, n] = radii[n] + inside
+            else:
+                out[k, n] = radii[n] - math.hypot(max(abs(x) - ex, 0.0), max(abs(y) - ey, 0.0))
+    return out
 
 
 class Blocker:

@@ -285,7 +285,7 @@ class PhysicsWorld:
         (not parked), the force field each one's centre of mass lies in (−1: none) and that
         field's speed now, m/s. From the state read at the last tick; nothing is asked of the engine."""
         rows = self.bodies.in_play_rows()
-        field, _, _ = self.fields.locate(self.bodies.positions[rows])
+        field = self.fields.which(self.bodies.positions[rows])
         if len(self.fields) == 0:   # a scene without belts (an arm over a table): no speed to look up
             return rows, field, np.zeros(len(rows))
         return rows, field, np.where(field >= 0, self.fields.speeds[field], 0.0)
