@@ -76,6 +76,8 @@ RISE = 0.02           # m/s: most vertical speed
 SINK = 0.005          # m: most distance between its base and the belt's surface
 STILL = 0.005         # m/s: on a still belt a bottle slower than this re-enters, to rest
 FIXED_MARGIN = SHAPE_MARGIN + 0.001   # m a free bottle keeps from fixed geometry beyond its travel
+SLIDE = 1e-9          # m: most a bottle sliding along a box's face may come nearer it over a look
+SLIDE_DEPTH = 1e-6    # m: most `check` lets a sliding bottle go deeper into the face over a run (SLIDE a look)
 LOOKAHEAD = 4         # ticks a free bottle's tests look forward, by default
 LONG = 4              # a whole look goes this many look-aheads forward where it can
 EVERY = 15            # ticks between two looks for bottles that may leave the engine
@@ -117,6 +119,7 @@ class FreeTransport:
         self._parts_at_rest = None          # their boxes while none moves
         self._probes: dict[int, int] = {}   # body row → collision shape, for `check`
         self._trains_seen: dict = {}        # for `check`: free pairs that touch (a train's), their depth when first seen
+        self._slides_seen: dict = {}        # for `check`: (free row, fixed body) touching, the depth when first seen
         self._checked: set[int] = set()     # the free rows at the last `check`
 
     def add(self, allowed: bool, ahead: int = LOOKAHEAD) -> None:
@@ -175,7 +178,13 @@ class FreeTransport:
         FIXED_MARGIN. A bottle setting off from rest on a belt between rails is pulled along
         them, not into them. Each segment's distance from each box it may reach (listed
         within LIST) against the radius so widened: its ends and the box's corners give the
-        distance whenever the segment is shorter than the bottle is wide."""
+        distance whenever the segment is shorter than the bottle is wide.
+
+        A bottle that rides along a box's face instead — beside that face all the way, and
+        coming no nearer it than SLIDE — slides along it as a bottle in the engine slides along
+        a frictionless rail, untouched: however near it is, even touching (a queue's bottles
+        ride on pressed against a guard rail, at one velocity along it), that box cannot
+        stop it (`_slides`)."""
         b = self.bodies
         if len(rows) == 0:
             return np.zeros(0, bool)
@@ -502,17 +511,18 @@ class FreeTransport:
         self.bodies.stale = True
 
     # --- the engine's own word, for tests -----------------------------------------------------
-    def check(self, tick: int, floors: set[int], held=()) -> None:
+    def check(self, tick: int, floors: set[int], fixed: set[int] = frozenset(), held=()) -> None:
         """Every free bottle at its pose, asked of the engine: a cylinder of its full radius there
         touches no body but a floor or a bottle an arm holds (`held`, rows: out of the collision
-        world while held, and looked at whole when let go of). Free bottles' engine poses are
-        stale: they are compared with each other here, as upright cylinders; two may touch only
-        as a train does — they touched when they went free, at one velocity, and are no deeper
-        into each other than then."""
+        world while held, and looked at whole when let go of) — or a fixed body (`fixed`: rails,
+        gates) it slides along (`_slides`): touching it when it went free, and no deeper into it
+        since than SLIDE_DEPTH. Free bottles' engine poses are stale: they are compared with each
+        other here, as upright cylinders; two may touch only as a train does — they touched when
+        they went free, at one velocity, and are no deeper into each other than then."""
         b, client = self.bodies, self.engine.client
         rows = self.rows.tolist()
         skip = floors | {b.ids[n] for n in rows} | {b.ids[n] for n in held}
-        trains = {}
+        trains, slides = {}, {}
         for n in rows:
             at, orientation = b.positions[n].tolist(), b.orientations[n].tolist()
             half = boxes(b.orientations[[n]], b.radii[[n]], b.half_heights[[n]])[0]
@@ -523,9 +533,15 @@ class FreeTransport:
                 touch = pybullet.getClosestPoints(-1, other, 0.0, collisionShapeA=self._probe(n),
                                                   collisionShapePositionA=at, collisionShapeOrientationA=orientation,
                                                   physicsClientId=client)
-                if touch:
+                if not touch:
+                    continue
+                depth = -min(point[8] for point in touch)
+                was = self._slides_seen.get((n, other))
+                if other not in fixed or (was is None and n in self._checked) or depth > (
+                        was if was is not None else depth) + SLIDE_DEPTH:
                     raise RuntimeError(f"tick {tick}: {b.labels[n]} is in free transport but touches body {other} "
                                        f"at {tuple(round(float(c), 4) for c in touch[0][5])}")
+                slides[(n, other)] = depth if was is None else was
             for m in rows:
                 apart = b.positions[m] - b.positions[n]
                 depth = b.radii[m] + b.radii[n] - np.hypot(apart[0], apart[1])
@@ -536,7 +552,7 @@ class FreeTransport:
                             was is None and {n, m} <= self._checked) or depth > (was if was is not None else depth) + 1e-9:
                         raise RuntimeError(f"tick {tick}: free bottles {b.labels[n]} and {b.labels[m]} touch")
                     trains[(n, m)] = depth if was is None else was
-        self._trains_seen, self._checked = trains, set(rows)
+        self._trains_seen, self._slides_seen, self._checked = trains, slides, set(rows)
 
     def _probe(self, n: int) -> int:
         """A collision shape standing for bottle `n` in `check` (made once, outside the world)."""
@@ -560,6 +576,7 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
     # Per row: its way at its velocity (wx, wy), the pull's way along it (gx, gy) and the widening across.
     wx, wy = np.empty(rows.shape[0]), np.empty(rows.shape[0])
     gx, gy = np.empty(rows.shape[0]), np.empty(rows.shape[0])
+    px_, py_ = np.empty(rows.shape[0]), np.empty(rows.shape[0])
     widen = np.empty(rows.shape[0])
     for i in range(rows.shape[0]):
         n_ = rows[i]
@@ -576,6 +593,7 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
             along, across = sx * ux + sy * uy, abs(sx * uy - sy * ux)
         wx[i], wy[i] = vx * n * dt, vy * n * dt
         gx[i], gy[i] = ux * along, uy * along
+        px_[i], py_[i] = sx, sy
         widen[i] = across + FIXED_MARGIN
     for q in range(pair_row.shape[0]):
         i = mine[pair_row[q]] - 1
@@ -588,6 +606,9 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
         ax, ay = px - c[k, 0], py - c[k, 1]
         a0, a1 = cos[k] * ax + sin[k] * ay, cos[k] * ay - sin[k] * ax
         d0, d1 = cos[k] * wx[i] + sin[k] * wy[i], cos[k] * wy[i] - sin[k] * wx[i]
+        if _slides(a0, a1, d0, d1, cos[k] * px_[i] + sin[k] * py_[i], cos[k] * py_[i] - sin[k] * px_[i],
+                   h[k, 0], h[k, 1]):
+            continue
         e0, e1 = cos[k] * gx[i] + sin[k] * gy[i], cos[k] * gy[i] - sin[k] * gx[i]
         gap = min(_segment_gap(a0, a1, d0, d1, h[k, 0], h[k, 1]), _segment_gap(a0, a1, e0, e1, h[k, 0], h[k, 1]),
                   _segment_gap(a0 + d0, a1 + d1, e0, e1, h[k, 0], h[k, 1]))
@@ -689,6 +710,23 @@ def _listing(rows, positions, radii, half_heights, pair_row, pair_box, c, h, cos
                 out_row.append(n)
                 out_box.append(k)
     return np.array(out_row, np.int64), np.array(out_box, np.int64)
+
+
+@njit(cache=True)
+def _slides(a0, a1, d0, d1, s0, s1, hx, hy):
+    """Whether a bottle at (a0, a1) in a box's frame (half extents hx, hy), its way the
+    parallelogram of (d0, d1) and (s0, s1), stays beside one face of the box — its centre
+    within the face's span all the way, where the box's nearest point to it is on that face —
+    and comes no nearer the face than SLIDE."""
+    for j in range(2):
+        aj, dj, sj, hj = (a1, d1, s1, hy) if j == 1 else (a0, d0, s0, hx)
+        ai, di, si, hi = (a0, d0, s0, hx) if j == 1 else (a1, d1, s1, hy)
+        if abs(aj) < hj or max(abs(ai), abs(ai + di), abs(ai + si), abs(ai + di + si)) > hi:
+            continue
+        side = 1.0 if aj > 0.0 else -1.0
+        if min(0.0, side * dj) + min(0.0, side * sj) >= -SLIDE:
+            return True
+    return False
 
 
 @njit(cache=True)
