@@ -126,11 +126,12 @@ def test_what_free_transport_cannot_move_is_refused_by_name(tmp_path):
         world.add_bottle((0, 0, 0), 0.03, 0.1, 0.05, "b", transport="exact", lookahead=1)
 
 
-def magazine(transport: str):
-    """A line of five bottles 4 cm apart resting on a stopped belt between rails (gripping with
-    friction, μ = 0.3, as the bottling plant's magazine does), which then runs for 1 s at
-    0.5 m/s and stops: (the world's positions after each phase, the world), the engine asked
-    at every tick about every resting and free bottle."""
+def magazine(transport: str, spacing: float = 0.1):
+    """A line of five bottles `spacing` apart (4 cm gaps by default; 0.06: each touching the
+    next) resting on a stopped belt between rails (gripping with friction, μ = 0.3, as the
+    bottling plant's magazine does), which then runs for 1 s at 0.5 m/s and stops: (the world's
+    positions after each phase, the world), the engine asked at every tick about every resting
+    and free bottle."""
     world = PhysicsWorld(150)
     world.check_free = world.check_rest = True
     world.add_support(0.0, (0.0, -0.07, 3.0, 0.07))
@@ -138,7 +139,7 @@ def magazine(transport: str):
     for side in (1, -1):
         world.add_static_box((1.5, side * 0.06, 0.04), (1.5, 0.01, 0.04))
     for k in range(5):
-        world.add_bottle((0.2 + 0.1 * k, 0, 0), 0.03, 0.1, 0.05, f"b{k}", transport=transport)
+        world.add_bottle((0.2 + spacing * k, 0, 0), 0.03, 0.1, 0.05, f"b{k}", transport=transport)
     ends = []
     world.step(60)
     ends.append(world.positions.copy())
@@ -220,3 +221,88 @@ def test_a_free_bottle_comes_back_before_a_wall_when_its_belt_speeds_up(distance
         world.set_field_speed(belt, 0.5)
         world.step(60)
         assert not world.transport.free[row] and world.positions[row, 0] + 0.03 <= 1.0 + 1e-3
+
+
+def test_a_queue_standing_touching_rides_off_free_as_a_train_and_rests_again_without_the_engine():
+    # Each bottle touches the next (the bottling plant's magazine stands in touching pairs): one
+    # law at one velocity, bit for bit, moves them alike, so they ride free touching.
+    (_, engine_run, engine_end), engine = magazine("engine", spacing=0.06)
+    engine.close()
+    (rested, running, end), world = magazine("exact", spacing=0.06)
+    with world:
+        t = world.transport
+        assert t.started == 5 and t.stopped == 5 and t.entered == 0 and t.left == 0
+        assert np.abs(np.diff(running[:, 0]) - np.diff(rested[:, 0])).max() < 1e-12
+        assert np.abs(running[:, :2] - engine_run[:, :2]).max() < 1e-3
+        assert np.abs(end[:, :2] - engine_end[:, :2]).max() < 1e-3
+
+
+def rail_world() -> PhysicsWorld:
+    """A belt at 0.5 m/s along x between rails whose inner faces are 5 cm from its centre line,
+    and a wall across it at x = 1.5."""
+    world = PhysicsWorld(150)
+    world.check_free = world.check_rest = True
+    world.add_support(0.0, (0.0, -0.07, 3.0, 0.07))
+    world.add_belt_field(Straight(Pose(0.0, 0.0, 0.0, 0.0), 3.0), 0.05, -0.02, 0.1, 16.0, 0.5)
+    for side in (1, -1):
+        world.add_static_box((1.5, side * 0.06, 0.04), (1.5, 0.01, 0.04))
+    world.add_static_box((1.51, 0.0, 0.04), (0.01, 0.05, 0.04))
+    return world
+
+
+def test_a_train_comes_back_into_the_engine_whole():
+    # Three touching bottles set off from rest as a train towards the wall: the first comes back
+    # before it reaches the wall, and the two touching it with it, at the same tick.
+    with rail_world() as world:
+        belt = 0
+        world.set_field_speed(belt, 0.0)
+        rows = [world.add_bottle((0.8 + 0.06 * k, 0, 0), 0.03, 0.1, 0.05, f"b{k}", transport="exact")
+                for k in range(3)]
+        world.step(60)
+        assert world.rest.resting[rows].all()
+        world.set_field_speed(belt, 0.5)
+        assert world.transport.free[rows].all()
+        seen = set()
+        for _ in range(200):
+            world.step(1)        # check_free: the engine's word at every tick
+            seen.add(tuple(world.transport.free[rows].tolist()))
+        assert seen == {(True, True, True), (False, False, False)}
+        assert world.positions[rows[-1], 0] + 0.03 <= 1.5 + 1e-3
+
+
+def test_a_bottle_riding_against_a_guard_rail_slides_along_it_free():
+    # Put down 0.1 mm from the rail, the belt's law takes it along the rail and never into it.
+    ends = {}
+    for transport in ("engine", "exact"):
+        with rail_world() as world:
+            row = world.add_bottle((0.2, 0.0199, 0), 0.03, 0.1, 0.05, "b", transport=transport)
+            free = 0
+            for _ in range(150):
+                world.step(1)    # check_free: it may touch the rail, no deeper than when it went free
+                free += bool(world.transport.free[row])
+            ends[transport] = (world.positions[row].copy(), free, world.transport.entered)
+    (engine_end, _, _), (end, free, entered) = ends["engine"], ends["exact"]
+    assert entered == 1 and free > 100           # free from soon after it got going, to the end
+    assert np.abs(end[:2] - engine_end[:2]).max() < 1e-3
+
+
+def test_check_free_names_a_free_bottle_pressed_into_a_rail_or_into_its_train():
+    # The allowances above are narrow: a train at one velocity, a rail no deeper than before.
+    (_, _, _), world = magazine("exact", spacing=0.06)
+    with world:
+        t, floors = world.transport, world.engine.floors
+        fixed = world.engine.fixed_bodies()
+        world.set_field_speed(0, 0.5)
+        world.step(30)
+        rows = t.rows
+        assert len(rows) == 5
+        world.velocities[rows[0], 0] += 1e-3          # one of the train no longer at the others' velocity
+        with pytest.raises(RuntimeError, match=r"free bottles b0 and b1 touch"):
+            t.check(world.tick, floors, fixed)
+    with rail_world() as world:
+        row = world.add_bottle((0.2, 0.0199, 0), 0.03, 0.1, 0.05, "b", transport="exact")
+        world.step(100)
+        assert world.transport.free[row]
+        world.positions[row, 1] += 0.001              # a millimetre into the rail
+        with pytest.raises(RuntimeError, match=r"b is in free transport but touches body"):
+            world.transport.check(world.tick, world.engine.floors, world.engine.fixed_bodies())
