@@ -68,7 +68,8 @@ def _depths(positions, radii, half_heights, centers, half_extents, cos, sin):
         c, s = cos[k], sin[k]
         ex, ey, ez = half_extents[k, 0], half_extents[k, 1], half_extents[k, 2]
         for n in range(positions.shape[0]):
-            dx, dy, dz = positions[n, 0] - centers[k, 0], positions[n, 1] - centers[k, 1], positions[n, 2] - centers[k, 2]
+            dx, dy = positions[n, 0] - centers[k, 0], positions[n, 1] - centers[k, 1]
+            dz = positions[n, 2] - centers[k, 2]
             x, y = c * dx + s * dy, -s * dx + c * dy
             if abs(dz) > ez + half_heights[n]:
                 out[k, n] = -math.inf

@@ -140,32 +140,21 @@ class ForceFields:
 
     def forces_at(self, f: np.ndarray, points: np.ndarray, velocities: np.ndarray, masses: np.ndarray) -> np.ndarray:
         """Forces (M,3) on M bodies driven by the fields `f`, each gripped at `points` moving at
-        `velocities` (the centre of mass, or the base for a bottle that rocks): the velocity
-        change of `changes_at` over one tick, times the mass."""
-        if len(f) == 0:
-            return np.zeros((0, 3))
-        dvx, dvy = self.changes_at(f, points, velocities, masses)
+        `velocities` (the centre of mass, or the base for a bottle that rocks): `drive`'s."""
         forces = np.zeros((len(f), 3))
-        per_second = masses / self.dt
-        forces[:, 0] = dvx * per_second
-        forces[:, 1] = dvy * per_second
+        if len(f):
+            forces[:, 0], forces[:, 1], _ = self.drive(f, points, velocities, masses, np.zeros(len(f)),
+                                                       np.zeros(len(f)))
         return forces
-
-    def changes_at(self, f: np.ndarray, points: np.ndarray, velocities: np.ndarray,
-                   masses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The horizontal velocity changes (dvx, dvy), each (M,), that the law gives M bodies in
-        one tick: what the engine adds to a driven body's velocity, and what free transport
-        (transport.py) adds itself.
-
-        One compiled loop over the bodies (`_changes`): this runs at every tick for every bottle
-        on a belt, where numpy's per-call overhead, not the arithmetic, was the cost."""
-        return _changes(np.asarray(f, np.int64), np.ascontiguousarray(points, float),
-                        np.ascontiguousarray(velocities, float), np.ascontiguousarray(masses, float), *self.laws())
 
     def drive(self, f: np.ndarray, points: np.ndarray, velocities: np.ndarray, masses: np.ndarray,
               radii: np.ndarray, spins: np.ndarray) -> tuple:
         """A tick's drive of M bodies on the fields `f` (Bottles.drive) in one compiled loop:
-        (fx, fy, torques), the forces of `forces_at` and the torques of `spin_torques`."""
+        (fx, fy, torques) — the velocity change the law gives each in one tick (`law_at`: what
+        the engine adds to a driven body's velocity, and what free transport adds itself,
+        transport.py), times the mass over dt; and the torques of `spin_torques`. This runs at
+        every tick for every bottle on a belt in the engine, where numpy's per-call overhead, not
+        the arithmetic, was the cost."""
         return _drive(np.asarray(f, np.int64), np.ascontiguousarray(points, float),
                       np.ascontiguousarray(velocities, float), np.ascontiguousarray(masses, float),
                       np.ascontiguousarray(radii, float), np.ascontiguousarray(spins, float), *self.laws())
@@ -229,19 +218,6 @@ def field_at(x, y, z, origin, cos, sin, is_arc, turn, radius, angle0, length, ha
 
 
 @njit(cache=True)
-def _changes(f, points, velocities, masses, dt, explicit, rates, per_mass, speeds, surface, limits,
-             is_arc, origin, cos, sin, turn, radius):
-    """ForceFields.changes_at, body by body: (dvx, dvy)."""
-    n = f.shape[0]
-    dvx, dvy = np.empty(n), np.empty(n)
-    for i in range(n):
-        dvx[i], dvy[i] = law_at(f[i], points[i, 0], points[i, 1], velocities[i, 0], velocities[i, 1], masses[i],
-                                dt, explicit, rates, per_mass, speeds, surface, limits, is_arc, origin, cos, sin, turn,
-                                radius)
-    return dvx, dvy
-
-
-@njit(cache=True)
 def _drive(f, points, velocities, masses, radii, spins, dt, explicit, rates, per_mass, speeds, surface, limits,
            is_arc, origin, cos, sin, turn, radius):
     """ForceFields.drive, body by body."""
@@ -272,7 +248,7 @@ def spin_torque_at(k, spin, mass, radius, dt, explicit, rates, per_mass, surface
 def law_at(k, px, py, vx, vy, mass, dt, explicit, rates, per_mass, speeds, surface, limits, is_arc, origin, cos, sin,
            turn, radius):
     """The velocity change (dvx, dvy) field `k`'s law gives a body at (px, py) moving at (vx, vy)
-    in one tick (ForceFields.changes_at); the arrays after `mass`: `ForceFields.laws`."""
+    in one tick (ForceFields.drive, FreeTransport.advance); the arrays after `mass`: `ForceFields.laws`."""
     rate = rates[k] if per_mass[k] else rates[k] / mass
     keep = 1.0 - rate * dt if explicit else math.exp(-rate * dt)
     speed = speeds[k]

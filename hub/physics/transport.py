@@ -4,7 +4,7 @@ A bottle carried by a belt, clear of every other body, rail, gate and belt end, 
 engine its contacts with the floor and the hub two state reads and a force per tick, and all
 the engine adds to what the belt's law gives it is a rocking of ~0.5° and a sink of ~2 mm into
 the floor. In free transport the hub moves it itself, all such bottles at once: per tick the
-velocity change the field would make the engine apply (ForceFields.changes_at: the exact
+velocity change the field would make the engine apply (fields.law_at: the exact
 relaxation on a straight, the same in the rotating surface's frame on a curve, the capped law
 with `friction:`), then the engine's own position step, x ← x + v·dt (Bullet's semi-implicit
 Euler). On a frictionless floor nothing else acts on it horizontally, so a free bottle moves as
@@ -103,7 +103,7 @@ class FreeTransport:
         self._pair_row = np.zeros(0, int)   # (bottle, fixed box) pairs within LIST: the boxes each may reach
         self._pair_box = np.zeros(0, int)
         self.rows = np.zeros(0, int)        # the free rows, in body order
-        self.pulls = np.zeros((0, 2))       # per body: the velocity change its belt gives it now (x, y), m/s (_pull_now)
+        self.pulls = np.zeros((0, 2))       # per body: its belt's velocity change now (x, y), m/s (_pull_now)
         self.most = np.zeros(0)            # per body: the most its belts may pull it over a look, m/s (_pull_now)
         self.due = 0                        # the tick at which the free bottles are looked at next
         self.clear = np.zeros(0, int)       # per body: the tick up to which its last whole look holds
@@ -118,7 +118,7 @@ class FreeTransport:
         self.offsets = np.zeros(0)          # per body: where a belt grips it, its centre's height over that (arm)
         self._parts_at_rest = None          # their boxes while none moves
         self._probes: dict[int, int] = {}   # body row → collision shape, for `check`
-        self._trains_seen: dict = {}        # for `check`: free pairs that touch (a train's), their depth when first seen
+        self._trains_seen: dict = {}        # for `check`: free pairs that touch (a train's), their depth then
         self._slides_seen: dict = {}        # for `check`: (free row, fixed body) touching, the depth when first seen
         self._checked: set[int] = set()     # the free rows at the last `check`
 
@@ -548,8 +548,9 @@ class FreeTransport:
                 if m > n and depth > 0.0 and abs(apart[2]) < b.half_heights[m] + b.half_heights[n]:
                     # Only a train's: at one velocity, bit for bit, touching since both went free, no deeper.
                     was = self._trains_seen.get((n, m))
-                    if not (b.velocities[m, :2] == b.velocities[n, :2]).all() or (
-                            was is None and {n, m} <= self._checked) or depth > (was if was is not None else depth) + 1e-9:
+                    one_velocity = (b.velocities[m, :2] == b.velocities[n, :2]).all()
+                    new = was is None and {n, m} <= self._checked      # free before, and not touching then
+                    if not one_velocity or new or depth > (depth if was is None else was) + 1e-9:
                         raise RuntimeError(f"tick {tick}: free bottles {b.labels[n]} and {b.labels[m]} touch")
                     trains[(n, m)] = depth if was is None else was
         self._trains_seen, self._slides_seen, self._checked = trains, slides, set(rows)

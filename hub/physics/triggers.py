@@ -165,8 +165,9 @@ def _overlap(positions, radii, half_heights, centers, half_extents, cos, sin):
 @njit(cache=True)
 def _inside(px, py, pz, r, h, cx, cy, cz, hx, hy, hz, c, s):
     """Whether the upright cylinder about (px, py, pz) (radius r, half height h) overlaps the box
-    (centre, half extents, cos and sin of its yaw; scalars, not rows, at a call per pair): in the box's frame the horizontal distance from its
-    axis to the box at most r, and the heights overlapping."""
+    (centre, half extents, cos and sin of its yaw; scalars, not rows, at a call per pair): in the
+    box's frame the horizontal distance from its axis to the box at most r, and the heights
+    overlapping."""
     dx, dy = px - cx, py - cy
     gx = max(abs(c * dx + s * dy) - hx, 0.0)
     gy = max(abs(c * dy - s * dx) - hy, 0.0)

@@ -386,7 +386,8 @@ class PhysicsWorld:
             if self.check_rest:
                 sleep.check(self.tick, self.parts.bodies())
             if self.check_free:
-                transport.check(self.tick, self.engine.floors, self.engine.fixed_bodies() | self.parts.bodies(), arms.held_rows())
+                transport.check(self.tick, self.engine.floors, self.engine.fixed_bodies() | self.parts.bodies(),
+                                arms.held_rows())
             if self.tick % rest.every == 0 and rest.enabled:
                 sleep.settle(self.fields, arms.held_rows(), moving)
             if free and self.tick % transport.every == 0:
