@@ -83,6 +83,7 @@ LONG = 4              # a whole look goes this many look-aheads forward where it
 EVERY = 15            # ticks between two looks for bottles that may leave the engine
 RETRY = 15            # ticks before a bottle found near something is looked at again
 LIST = 0.1            # m: the fixed boxes within this of a free bottle are the ones it is tested against
+NEAR = 32             # boxes a bottle's list holds; one with more within LIST stays in the engine
 
 
 class FreeTransport:
@@ -100,8 +101,8 @@ class FreeTransport:
         self.free = np.zeros(0, bool)
         self.enabled = False                # some bottle may ride free
         self.listed_at = np.zeros((0, 2))   # where each bottle's fixed boxes were listed (x, y)
-        self._pair_row = np.zeros(0, int)   # (bottle, fixed box) pairs within LIST: the boxes each may reach
-        self._pair_box = np.zeros(0, int)
+        self.near = np.zeros((0, NEAR), np.int64)   # per body: the fixed boxes within LIST of it then
+        self.near_count = np.zeros(0, np.int64)     # and how many (more than NEAR: too many to list)
         self.rows = np.zeros(0, int)        # the free rows, in body order
         self.pulls = np.zeros((0, 2))       # per body: its belt's velocity change now (x, y), m/s (_pull_now)
         self.most = np.zeros(0)            # per body: the most its belts may pull it over a look, m/s (_pull_now)
@@ -130,6 +131,8 @@ class FreeTransport:
         self.enabled = self.enabled or bool(allowed)
         self.free = np.append(self.free, False)
         self.listed_at = np.vstack((self.listed_at, np.full((1, 2), np.inf)))
+        self.near = np.vstack((self.near, np.zeros((1, NEAR), np.int64)))
+        self.near_count = np.append(self.near_count, 0)
         self.pulls = np.vstack((self.pulls, np.zeros((1, 2))))
         self.most = np.append(self.most, 0.0)
         self.next_try = np.append(self.next_try, 0)
@@ -154,16 +157,6 @@ class FreeTransport:
             self.offsets[row] = offset
 
     # --- the tests ------------------------------------------------------------------------
-    def _list(self, rows, positions) -> None:
-        """Note for each of `rows` the fixed boxes within LIST of it (the only ones it can reach
-        before it has moved LIST/2 and is listed again)."""
-        b = self.bodies
-        self.listed_at[rows] = positions[rows, :2]
-        if self._fixed is None:
-            return
-        self._pair_row, self._pair_box = _listing(rows, positions, b.radii, b.half_heights, self._pair_row,
-                                                  self._pair_box, *self._fixed)
-
     def _fixed_hit(self, rows, times: int, positions, velocities) -> np.ndarray:
         """(len(rows),): whether each of `rows`, headed on for `times` × its look-ahead (n ticks),
         could reach a fixed box.
@@ -178,7 +171,10 @@ class FreeTransport:
         FIXED_MARGIN. A bottle setting off from rest on a belt between rails is pulled along
         them, not into them. Each segment's distance from each box it may reach (listed
         within LIST) against the radius so widened: its ends and the box's corners give the
-        distance whenever the segment is shorter than the bottle is wide.
+        distance whenever the segment is shorter than the bottle is wide. Each bottle's boxes are
+        listed afresh once it has moved LIST/2 from where they were last (the only boxes it can
+        reach before then are within LIST of it there); one with more than NEAR of them counts as
+        reaching one.
 
         A bottle that rides along a box's face instead — beside that face all the way, and
         coming no nearer it than SLIDE — slides along it as a bottle in the engine slides along
@@ -186,16 +182,11 @@ class FreeTransport:
         ride on pressed against a guard rail, at one velocity along it), that box cannot
         stop it (`_slides`)."""
         b = self.bodies
-        if len(rows) == 0:
-            return np.zeros(0, bool)
-        moved = np.hypot(*(positions[rows, :2] - self.listed_at[rows]).T)
-        stale = moved > LIST / 2.0
-        if stale.any():
-            self._list(rows[stale], positions)
-        c, h, cos, sin = self._fixed if self._fixed is not None else (np.zeros((0, 3)), np.zeros((0, 3)),
-                                                                       np.zeros(0), np.zeros(0))
-        return _fixed_hit(rows, float(times), self.dt, positions, velocities, self.pulls, self.ahead, b.radii,
-                          b.half_heights, self._pair_row, self._pair_box, c, h, cos, sin)
+        if len(rows) == 0 or self._fixed is None:
+            return np.zeros(len(rows), bool)
+        return _fixed_hit(np.asarray(rows, np.int64), float(times), self.dt, positions, velocities, self.pulls,
+                          self.ahead, b.radii, b.half_heights, self.listed_at, self.near, self.near_count,
+                          *self._fixed)
 
     def steady(self, rows, orientations, velocities, spins) -> np.ndarray:
         """(len(rows),): upright and steady as a riding bottle is (tilt under TILT, spin under
@@ -567,20 +558,19 @@ class FreeTransport:
 
 
 @njit(cache=True)
-def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, pair_row, pair_box,
+def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at, near, near_count,
                c, h, cos, sin):
-    """FreeTransport._fixed_hit after the listing, row by row and pair by pair."""
+    """FreeTransport._fixed_hit, row by row and, for each, box by box of its list (listed again
+    first where it is stale)."""
     hit = np.zeros(rows.shape[0], np.bool_)
-    mine = np.zeros(ahead.shape[0], np.int64)
-    for i in range(rows.shape[0]):
-        mine[rows[i]] = i + 1
-    # Per row: its way at its velocity (wx, wy), the pull's way along it (gx, gy) and the widening across.
-    wx, wy = np.empty(rows.shape[0]), np.empty(rows.shape[0])
-    gx, gy = np.empty(rows.shape[0]), np.empty(rows.shape[0])
-    px_, py_ = np.empty(rows.shape[0]), np.empty(rows.shape[0])
-    widen = np.empty(rows.shape[0])
     for i in range(rows.shape[0]):
         n_ = rows[i]
+        if math.hypot(positions[n_, 0] - listed_at[n_, 0], positions[n_, 1] - listed_at[n_, 1]) > LIST / 2.0:
+            _relist(n_, positions, radii, half_heights, listed_at, near, near_count, c, h, cos, sin)
+        if near_count[n_] > near.shape[1]:
+            hit[i] = True
+            continue
+        # Its way at its velocity (wx, wy), the pull's way along it (gx, gy) and the widening across.
         n = ahead[n_] * times
         vx, vy = velocities[n_, 0], velocities[n_, 1]
         grow = n * (n + 1.0) / 2.0 * dt
@@ -592,29 +582,25 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
         else:
             ux, uy = vx / speed, vy / speed
             along, across = sx * ux + sy * uy, abs(sx * uy - sy * ux)
-        wx[i], wy[i] = vx * n * dt, vy * n * dt
-        gx[i], gy[i] = ux * along, uy * along
-        px_[i], py_[i] = sx, sy
-        widen[i] = across + FIXED_MARGIN
-    for q in range(pair_row.shape[0]):
-        i = mine[pair_row[q]] - 1
-        if i < 0 or hit[i]:
-            continue
-        n_, k = rows[i], pair_box[q]
+        wx, wy = vx * n * dt, vy * n * dt
+        gx, gy = ux * along, uy * along
+        widen = across + FIXED_MARGIN
         px, py = positions[n_, 0], positions[n_, 1]
-        if abs(positions[n_, 2] - c[k, 2]) > h[k, 2] + half_heights[n_] + FIXED_MARGIN:
-            continue
-        ax, ay = px - c[k, 0], py - c[k, 1]
-        a0, a1 = cos[k] * ax + sin[k] * ay, cos[k] * ay - sin[k] * ax
-        d0, d1 = cos[k] * wx[i] + sin[k] * wy[i], cos[k] * wy[i] - sin[k] * wx[i]
-        if _slides(a0, a1, d0, d1, cos[k] * px_[i] + sin[k] * py_[i], cos[k] * py_[i] - sin[k] * px_[i],
-                   h[k, 0], h[k, 1]):
-            continue
-        e0, e1 = cos[k] * gx[i] + sin[k] * gy[i], cos[k] * gy[i] - sin[k] * gx[i]
-        gap = min(_segment_gap(a0, a1, d0, d1, h[k, 0], h[k, 1]), _segment_gap(a0, a1, e0, e1, h[k, 0], h[k, 1]),
-                  _segment_gap(a0 + d0, a1 + d1, e0, e1, h[k, 0], h[k, 1]))
-        if gap < radii[n_] + widen[i]:
-            hit[i] = True
+        for j in range(near_count[n_]):
+            k = near[n_, j]
+            if abs(positions[n_, 2] - c[k, 2]) > h[k, 2] + half_heights[n_] + FIXED_MARGIN:
+                continue
+            ax, ay = px - c[k, 0], py - c[k, 1]
+            a0, a1 = cos[k] * ax + sin[k] * ay, cos[k] * ay - sin[k] * ax
+            d0, d1 = cos[k] * wx + sin[k] * wy, cos[k] * wy - sin[k] * wx
+            if _slides(a0, a1, d0, d1, cos[k] * sx + sin[k] * sy, cos[k] * sy - sin[k] * sx, h[k, 0], h[k, 1]):
+                continue
+            e0, e1 = cos[k] * gx + sin[k] * gy, cos[k] * gy - sin[k] * gx
+            gap = min(_segment_gap(a0, a1, d0, d1, h[k, 0], h[k, 1]), _segment_gap(a0, a1, e0, e1, h[k, 0], h[k, 1]),
+                      _segment_gap(a0 + d0, a1 + d1, e0, e1, h[k, 0], h[k, 1]))
+            if gap < radii[n_] + widen:
+                hit[i] = True
+                break
     return hit
 
 
@@ -691,26 +677,20 @@ def _advance(rows, positions, orientations, velocities, masses, offsets, origin,
 
 
 @njit(cache=True)
-def _listing(rows, positions, radii, half_heights, pair_row, pair_box, c, h, cos, sin):
-    """The (bottle, fixed box) pairs: those of other bottles than `rows` kept, and for each of
-    `rows` the boxes its upright footprint is within LIST of (apart in height: not listed)."""
-    again = np.zeros(radii.shape[0], np.bool_)
-    for n in rows:
-        again[n] = True
-    out_row, out_box = [], []
-    for q in range(pair_row.shape[0]):
-        if not again[pair_row[q]]:
-            out_row.append(pair_row[q])
-            out_box.append(pair_box[q])
-    for n in rows:
-        for k in range(c.shape[0]):
-            if abs(positions[n, 2] - c[k, 2]) > h[k, 2] + half_heights[n] + FIXED_MARGIN:
-                continue
-            dx, dy = positions[n, 0] - c[k, 0], positions[n, 1] - c[k, 1]
-            if _box_distance(cos[k] * dx + sin[k] * dy, cos[k] * dy - sin[k] * dx, h[k, 0], h[k, 1]) - radii[n] < LIST:
-                out_row.append(n)
-                out_box.append(k)
-    return np.array(out_row, np.int64), np.array(out_box, np.int64)
+def _relist(n, positions, radii, half_heights, listed_at, near, near_count, c, h, cos, sin):
+    """Body `n`'s list: the fixed boxes its upright footprint is within LIST of (apart in height:
+    not listed), the first NEAR of them, and how many there are."""
+    count = 0
+    for k in range(c.shape[0]):
+        if abs(positions[n, 2] - c[k, 2]) > h[k, 2] + half_heights[n] + FIXED_MARGIN:
+            continue
+        dx, dy = positions[n, 0] - c[k, 0], positions[n, 1] - c[k, 1]
+        if _box_distance(cos[k] * dx + sin[k] * dy, cos[k] * dy - sin[k] * dx, h[k, 0], h[k, 1]) - radii[n] < LIST:
+            if count < near.shape[1]:
+                near[n, count] = k
+            count += 1
+    near_count[n] = count
+    listed_at[n, 0], listed_at[n, 1] = positions[n, 0], positions[n, 1]
 
 
 @njit(cache=True)
