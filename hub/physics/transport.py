@@ -77,7 +77,9 @@ SINK = 0.005          # m: most distance between its base and the belt's surface
 STILL = 0.005         # m/s: on a still belt a bottle slower than this re-enters, to rest
 FIXED_MARGIN = SHAPE_MARGIN + 0.001   # m a free bottle keeps from fixed geometry beyond its travel
 SLIDE = 1e-9          # m: most a bottle sliding along a box's face may come nearer it over a look
+SLIDE_INTO = 0.0005   # m: a bottle reaching further than this into a box does not slide along it
 SLIDE_DEPTH = 1e-6    # m: most `check` lets a sliding bottle go deeper into the face over a run (SLIDE a look)
+FALL = 9.81           # m/s²: what two steady bodies' heights may close at, beyond their vertical speeds
 LOOKAHEAD = 4         # ticks a free bottle's tests look forward, by default
 LONG = 4              # a whole look goes this many look-aheads forward where it can
 EVERY = 15            # ticks between two looks for bottles that may leave the engine
@@ -100,7 +102,7 @@ class FreeTransport:
         self.allowed = np.zeros(0, bool)    # the bottle's kind and its `transport:` let it go free
         self.free = np.zeros(0, bool)
         self.enabled = False                # some bottle may ride free
-        self.listed_at = np.zeros((0, 2))   # where each bottle's fixed boxes were listed (x, y)
+        self.listed_at = np.zeros((0, 3))   # where each bottle's fixed boxes were listed
         self.near = np.zeros((0, NEAR), np.int64)   # per body: the fixed boxes within LIST of it then
         self.near_count = np.zeros(0, np.int64)     # and how many (more than NEAR: too many to list)
         self.rows = np.zeros(0, int)        # the free rows, in body order
@@ -130,7 +132,7 @@ class FreeTransport:
         self.allowed = np.append(self.allowed, allowed)
         self.enabled = self.enabled or bool(allowed)
         self.free = np.append(self.free, False)
-        self.listed_at = np.vstack((self.listed_at, np.full((1, 2), np.inf)))
+        self.listed_at = np.vstack((self.listed_at, np.full((1, 3), np.inf)))
         self.near = np.vstack((self.near, np.zeros((1, NEAR), np.int64)))
         self.near_count = np.append(self.near_count, 0)
         self.pulls = np.vstack((self.pulls, np.zeros((1, 2))))
@@ -172,21 +174,22 @@ class FreeTransport:
         them, not into them. Each segment's distance from each box it may reach (listed
         within LIST) against the radius so widened: its ends and the box's corners give the
         distance whenever the segment is shorter than the bottle is wide. Each bottle's boxes are
-        listed afresh once it has moved LIST/2 from where they were last (the only boxes it can
-        reach before then are within LIST of it there); one with more than NEAR of them counts as
-        reaching one.
+        listed afresh once it has moved LIST/2 from where they were last, across or up (the only
+        boxes it can reach before then are within LIST of it there, both ways); one with more
+        than NEAR of them counts as reaching one.
 
-        A bottle that rides along a box's face instead — beside that face all the way, and
-        coming no nearer it than SLIDE — slides along it as a bottle in the engine slides along
-        a frictionless rail, untouched: however near it is, even touching (a queue's bottles
-        ride on pressed against a guard rail, at one velocity along it), that box cannot
-        stop it (`_slides`)."""
+        A bottle that rides a straight belt along a box's face instead — beside that face all the
+        way, no further into it than the engine's contact leaves one (SLIDE_INTO), and coming no
+        nearer it than SLIDE — slides along it as a bottle in the engine slides along a
+        frictionless rail, untouched: however near it is, even touching (a queue's bottles ride
+        on pressed against a guard rail, at one velocity along it), that box cannot stop it
+        (`_slides`)."""
         b = self.bodies
         if len(rows) == 0 or self._fixed is None:
             return np.zeros(len(rows), bool)
         return _fixed_hit(np.asarray(rows, np.int64), float(times), self.dt, positions, velocities, self.pulls,
                           self.ahead, b.radii, b.half_heights, self.listed_at, self.near, self.near_count,
-                          *self._fixed)
+                          self.fields.straight_law, self.fields.regions(), *self._fixed)
 
     def steady(self, rows, orientations, velocities, spins) -> np.ndarray:
         """(len(rows),): upright and steady as a riding bottle is (tilt under TILT, spin under
@@ -478,8 +481,9 @@ class FreeTransport:
 
     # --- the tick itself --------------------------------------------------------------------
     def look_whole(self) -> None:
-        """A belt's speed changed, or an arm let go of a bottle: the free bottles are looked at
-        whole before the next tick (whose look takes every pull afresh, at the new speed)."""
+        """A belt's speed changed, an arm let go of a bottle or a part turned solid or void: the
+        free bottles are looked at whole before the next tick (whose look takes every pull afresh,
+        at the new speed)."""
         self.due = 0
         self._everything = True
 
@@ -506,8 +510,8 @@ class FreeTransport:
         """Every free bottle at its pose, asked of the engine: a cylinder of its full radius there
         touches no body but a floor or a bottle an arm holds (`held`, rows: out of the collision
         world while held, and looked at whole when let go of) — or a fixed body (`fixed`: rails,
-        gates) it slides along (`_slides`): touching it when it went free, and no deeper into it
-        since than SLIDE_DEPTH. Free bottles' engine poses are stale: they are compared with each
+        gates) it slides along (`_slides`): touching it when it went free, no deeper than
+        SLIDE_INTO then, and no deeper into it since than SLIDE_DEPTH. Free bottles' engine poses are stale: they are compared with each
         other here, as upright cylinders; two may touch only as a train does — they touched when
         they went free, at one velocity, and are no deeper into each other than then."""
         b, client = self.bodies, self.engine.client
@@ -528,8 +532,8 @@ class FreeTransport:
                     continue
                 depth = -min(point[8] for point in touch)
                 was = self._slides_seen.get((n, other))
-                if other not in fixed or (was is None and n in self._checked) or depth > (
-                        was if was is not None else depth) + SLIDE_DEPTH:
+                first = SLIDE_INTO if was is None else was      # as deep as sliding allows, then no deeper
+                if other not in fixed or (was is None and n in self._checked) or depth > first + SLIDE_DEPTH:
                     raise RuntimeError(f"tick {tick}: {b.labels[n]} is in free transport but touches body {other} "
                                        f"at {tuple(round(float(c), 4) for c in touch[0][5])}")
                 slides[(n, other)] = depth if was is None else was
@@ -559,13 +563,15 @@ class FreeTransport:
 
 @njit(cache=True)
 def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at, near, near_count,
-               c, h, cos, sin):
+               straight_law, regions, c, h, cos, sin):
     """FreeTransport._fixed_hit, row by row and, for each, box by box of its list (listed again
-    first where it is stale)."""
+    first where it is stale). A bottle slides along a face only on a straight belt it stays on
+    (`_belt`): there the belt's pull keeps its direction, and its way is the parallelogram."""
     hit = np.zeros(rows.shape[0], np.bool_)
     for i in range(rows.shape[0]):
         n_ = rows[i]
-        if math.hypot(positions[n_, 0] - listed_at[n_, 0], positions[n_, 1] - listed_at[n_, 1]) > LIST / 2.0:
+        if (math.hypot(positions[n_, 0] - listed_at[n_, 0], positions[n_, 1] - listed_at[n_, 1]) > LIST / 2.0
+                or abs(positions[n_, 2] - listed_at[n_, 2]) > LIST / 2.0):
             _relist(n_, positions, radii, half_heights, listed_at, near, near_count, c, h, cos, sin)
         if near_count[n_] > near.shape[1]:
             hit[i] = True
@@ -586,6 +592,7 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
         gx, gy = ux * along, uy * along
         widen = across + FIXED_MARGIN
         px, py = positions[n_, 0], positions[n_, 1]
+        straight = _belt(n_, n, dt, positions, velocities, pulls, straight_law, regions) >= 0
         for j in range(near_count[n_]):
             k = near[n_, j]
             if abs(positions[n_, 2] - c[k, 2]) > h[k, 2] + half_heights[n_] + FIXED_MARGIN:
@@ -593,7 +600,8 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
             ax, ay = px - c[k, 0], py - c[k, 1]
             a0, a1 = cos[k] * ax + sin[k] * ay, cos[k] * ay - sin[k] * ax
             d0, d1 = cos[k] * wx + sin[k] * wy, cos[k] * wy - sin[k] * wx
-            if _slides(a0, a1, d0, d1, cos[k] * sx + sin[k] * sy, cos[k] * sy - sin[k] * sx, h[k, 0], h[k, 1]):
+            if straight and _slides(a0, a1, d0, d1, cos[k] * sx + sin[k] * sy, cos[k] * sy - sin[k] * sx, h[k, 0],
+                                    h[k, 1], radii[n_]):
                 continue
             e0, e1 = cos[k] * gx + sin[k] * gy, cos[k] * gy - sin[k] * gx
             gap = min(_segment_gap(a0, a1, d0, d1, h[k, 0], h[k, 1]), _segment_gap(a0, a1, e0, e1, h[k, 0], h[k, 1]),
@@ -678,11 +686,11 @@ def _advance(rows, positions, orientations, velocities, masses, offsets, origin,
 
 @njit(cache=True)
 def _relist(n, positions, radii, half_heights, listed_at, near, near_count, c, h, cos, sin):
-    """Body `n`'s list: the fixed boxes its upright footprint is within LIST of (apart in height:
-    not listed), the first NEAR of them, and how many there are."""
+    """Body `n`'s list: the fixed boxes its upright footprint is within LIST of, horizontally and
+    in height, the first NEAR of them, and how many there are."""
     count = 0
     for k in range(c.shape[0]):
-        if abs(positions[n, 2] - c[k, 2]) > h[k, 2] + half_heights[n] + FIXED_MARGIN:
+        if abs(positions[n, 2] - c[k, 2]) > h[k, 2] + half_heights[n] + FIXED_MARGIN + LIST:
             continue
         dx, dy = positions[n, 0] - c[k, 0], positions[n, 1] - c[k, 1]
         if _box_distance(cos[k] * dx + sin[k] * dy, cos[k] * dy - sin[k] * dx, h[k, 0], h[k, 1]) - radii[n] < LIST:
@@ -690,19 +698,21 @@ def _relist(n, positions, radii, half_heights, listed_at, near, near_count, c, h
                 near[n, count] = k
             count += 1
     near_count[n] = count
-    listed_at[n, 0], listed_at[n, 1] = positions[n, 0], positions[n, 1]
+    listed_at[n, 0], listed_at[n, 1], listed_at[n, 2] = positions[n, 0], positions[n, 1], positions[n, 2]
 
 
 @njit(cache=True)
-def _slides(a0, a1, d0, d1, s0, s1, hx, hy):
-    """Whether a bottle at (a0, a1) in a box's frame (half extents hx, hy), its way the
-    parallelogram of (d0, d1) and (s0, s1), stays beside one face of the box — its centre
+def _slides(a0, a1, d0, d1, s0, s1, hx, hy, r):
+    """Whether a bottle of radius r at (a0, a1) in a box's frame (half extents hx, hy), its way
+    the parallelogram of (d0, d1) and (s0, s1), stays beside one face of the box — its centre
     within the face's span all the way, where the box's nearest point to it is on that face —
-    and comes no nearer the face than SLIDE."""
+    reaches no further into it than SLIDE_INTO (what the engine's contact leaves: one deeper is
+    in a box that is not solid, which may turn solid) and comes no nearer the face than SLIDE."""
     for j in range(2):
         aj, dj, sj, hj = (a1, d1, s1, hy) if j == 1 else (a0, d0, s0, hx)
         ai, di, si, hi = (a0, d0, s0, hx) if j == 1 else (a1, d1, s1, hy)
-        if abs(aj) < hj or max(abs(ai), abs(ai + di), abs(ai + si), abs(ai + di + si)) > hi:
+        if (abs(aj) - hj < r - SLIDE_INTO
+                or max(abs(ai), abs(ai + di), abs(ai + si), abs(ai + di + si)) > hi):
             continue
         side = 1.0 if aj > 0.0 else -1.0
         if min(0.0, side * dj) + min(0.0, side * sj) >= -SLIDE:
@@ -754,8 +764,10 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
         reaches[q] = bound(radii[n], half_heights[n], velocities[n], w, ahead[n] * times * dt, SHAPE_MARGIN)
         spin = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
         x, y = orientations[n, 0], orientations[n, 1]
-        # Upright and not rocking much: its footprint is its base's circle (a bob up and down moves it not at all).
-        steady[q] = free[n] or (1.0 - 2.0 * (x * x + y * y) > tilt and spin < SPIN)
+        # Upright, not rocking much and not rising or falling: its footprint is its base's circle
+        # (a bob up and down moves it not at all).
+        steady[q] = free[n] or (1.0 - 2.0 * (x * x + y * y) > tilt and spin < SPIN
+                                and abs(velocities[n, 2]) < RISE)
     lo_x, hi_x, lo_y, hi_y = np.inf, -np.inf, np.inf, -np.inf
     for q in range(count):
         lo_x = min(lo_x, positions[play[q], 0])
@@ -809,7 +821,11 @@ def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, rad
     if steady[a] and steady[o]:
         n = max(ahead[na], ahead[no]) * times
         ax, ay = positions[na, 0] - positions[no, 0], positions[na, 1] - positions[no, 1]
-        if abs(positions[na, 2] - positions[no, 2]) >= half_heights[na] + half_heights[no]:
+        # One above the other: apart if their heights cannot close over the look (at their
+        # vertical speeds, and one falling freely).
+        span = n * dt
+        fall = (abs(velocities[na, 2]) + abs(velocities[no, 2])) * span + 0.5 * FALL * span * span
+        if abs(positions[na, 2] - positions[no, 2]) >= half_heights[na] + half_heights[no] + fall:
             return False
         closing = math.hypot(velocities[na, 0] - velocities[no, 0], velocities[na, 1] - velocities[no, 1])
         rock = turning(radii[na], half_heights[na], spins[na]) + turning(radii[no], half_heights[no], spins[no])

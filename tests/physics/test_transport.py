@@ -306,3 +306,52 @@ def test_check_free_names_a_free_bottle_pressed_into_a_rail_or_into_its_train():
         world.positions[row, 1] += 0.001              # a millimetre into the rail
         with pytest.raises(RuntimeError, match=r"b is in free transport but touches body"):
             world.transport.check(world.tick, world.engine.floors, world.engine.fixed_bodies())
+
+
+def plain_belt(world: PhysicsWorld, z: float = 0.0) -> int:
+    """A 3 m belt at 0.5 m/s along x at height `z`, its floor under it."""
+    world.add_support(z, (0.0, -0.07, 3.0, 0.07))
+    return world.add_belt_field(Straight(Pose(0.0, 0.0, z, 0.0), 3.0), 0.05, z - 0.02, z + 0.1, 16.0, 0.5)
+
+
+def test_a_bottle_deep_in_an_open_gate_does_not_slide_along_it_when_it_closes():
+    # Found by review: a bottle 1 cm into a box that was not solid went free "sliding" along it,
+    # and rode on inside it once it turned solid. It stays in the engine, which pushes it out.
+    with PhysicsWorld(150) as world:
+        world.check_free = world.check_rest = True
+        plain_belt(world)
+        row = world.add_bottle((0.05, 0, 0), 0.03, 0.1, 0.05, "a", transport="exact")
+        part = world.add_switchable_boxes([(1.0, 0.035, 0.04)], [(0.9, 0.015, 0.04)], [0.0], solid=False)
+        world.step(150)
+        world.set_solid(part, True)
+        world.step(90)
+        assert world.positions[row, 1] + 0.03 <= 0.02 + 5e-4     # out of the box (its face at y = 0.02)
+
+
+def test_a_bottle_falling_onto_a_free_one_brings_it_back_first():
+    # Found by review: two upright bottles one above the other counted as apart whatever their
+    # vertical speeds; a falling one is not steady, and heights close by what falling can close.
+    with PhysicsWorld(150) as world:
+        world.check_free = world.check_rest = True     # the engine's word at every tick
+        plain_belt(world)
+        below = world.add_bottle((0.05, 0, 0), 0.03, 0.1, 0.05, "below", transport="exact")
+        world.add_bottle((0.105, 0, 0.3), 0.03, 0.1, 0.05, "above", transport="engine")
+        world.step(60)
+        assert world.transport.entered >= 1 and not world.transport.free[below]
+
+
+def test_a_bottle_put_onto_a_belt_above_lists_the_boxes_up_there():
+    # Found by review: a bottle's list of fixed boxes was refreshed only when it had moved across,
+    # so one put on the belt above where it was listed rode free into a stopper up there.
+    with PhysicsWorld(150) as world:
+        world.check_free = world.check_rest = True
+        plain_belt(world)
+        plain_belt(world, 0.3)
+        world.add_static_box((0.29, 0.0, 0.34), (0.01, 0.07, 0.04))   # a stopper on the upper belt, its face at 0.28
+        row = world.add_bottle((0.05, 0, 0), 0.03, 0.1, 0.05, "a", transport="exact")
+        world.step(90)
+        assert world.transport.free[row]
+        world.park(row)
+        world.unpark(row, (0.20, 0.0, 0.3))
+        world.step(60)
+        assert world.positions[row, 0] + 0.03 <= 0.28 + 1e-3
