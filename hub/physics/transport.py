@@ -481,9 +481,8 @@ class FreeTransport:
 
     # --- the tick itself --------------------------------------------------------------------
     def look_whole(self) -> None:
-        """A belt's speed changed, an arm let go of a bottle or a part turned solid or void: the
-        free bottles are looked at whole before the next tick (whose look takes every pull afresh,
-        at the new speed)."""
+        """A belt's speed changed, or an arm let go of a bottle: the free bottles are looked at
+        whole before the next tick (whose look takes every pull afresh, at the new speed)."""
         self.due = 0
         self._everything = True
 
@@ -764,10 +763,9 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
         reaches[q] = bound(radii[n], half_heights[n], velocities[n], w, ahead[n] * times * dt, SHAPE_MARGIN)
         spin = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
         x, y = orientations[n, 0], orientations[n, 1]
-        # Upright, not rocking much and not rising or falling: its footprint is its base's circle
-        # (a bob up and down moves it not at all).
-        steady[q] = free[n] or (1.0 - 2.0 * (x * x + y * y) > tilt and spin < SPIN
-                                and abs(velocities[n, 2]) < RISE)
+        # Upright and not rocking much: its footprint is its base's circle (a bob up and down moves
+        # it not at all; one above another is apart only as far as falling cannot close, `_pair`).
+        steady[q] = free[n] or (1.0 - 2.0 * (x * x + y * y) > tilt and spin < SPIN)
     lo_x, hi_x, lo_y, hi_y = np.inf, -np.inf, np.inf, -np.inf
     for q in range(count):
         lo_x = min(lo_x, positions[play[q], 0])

@@ -246,7 +246,6 @@ class PhysicsWorld:
 
     def set_solid(self, part: int, solid: bool) -> None:
         self.parts.set_solid(part, solid)
-        self.transport.look_whole()   # free bottles near it are looked at against it as it is now
 
     def add_moving_boxes(self, centers, half_extents, yaws, axis) -> MovingPart:
         """A part of boxes (world frame, where it stands at offset 0) that slides along `axis`:
