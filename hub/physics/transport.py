@@ -77,7 +77,7 @@ SINK = 0.005          # m: most distance between its base and the belt's surface
 STILL = 0.005         # m/s: on a still belt a bottle slower than this re-enters, to rest
 FIXED_MARGIN = SHAPE_MARGIN + 0.001   # m a free bottle keeps from fixed geometry beyond its travel
 SLIDE = 1e-9          # m: most a bottle sliding along a box's face may come nearer it over a look
-SLIDE_INTO = 0.0005   # m: a bottle reaching further than this into a box does not slide along it
+SLIDE_INTO = SHAPE_MARGIN   # m: a bottle reaching further than this into a box does not slide along it
 SLIDE_DEPTH = 1e-6    # m: most `check` lets a sliding bottle go deeper into the face over a run (SLIDE a look)
 FALL = 9.81           # m/s²: what two steady bodies' heights may close at, beyond their vertical speeds
 LOOKAHEAD = 4         # ticks a free bottle's tests look forward, by default
@@ -705,8 +705,9 @@ def _slides(a0, a1, d0, d1, s0, s1, hx, hy, r):
     """Whether a bottle of radius r at (a0, a1) in a box's frame (half extents hx, hy), its way
     the parallelogram of (d0, d1) and (s0, s1), stays beside one face of the box — its centre
     within the face's span all the way, where the box's nearest point to it is on that face —
-    reaches no further into it than SLIDE_INTO (what the engine's contact leaves: one deeper is
-    in a box that is not solid, which may turn solid) and comes no nearer the face than SLIDE."""
+    reaches no further into it than SLIDE_INTO (what the engine's contact leaves, within the
+    shapes' margins: one deeper is in a box that is not solid, which may turn solid) and comes no
+    nearer the face than SLIDE."""
     for j in range(2):
         aj, dj, sj, hj = (a1, d1, s1, hy) if j == 1 else (a0, d0, s0, hx)
         ai, di, si, hi = (a0, d0, s0, hx) if j == 1 else (a1, d1, s1, hy)
