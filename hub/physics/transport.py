@@ -510,9 +510,10 @@ class FreeTransport:
         touches no body but a floor or a bottle an arm holds (`held`, rows: out of the collision
         world while held, and looked at whole when let go of) — or a fixed body (`fixed`: rails,
         gates) it slides along (`_slides`): touching it when it went free, no deeper than
-        SLIDE_INTO then, and no deeper into it since than SLIDE_DEPTH. Free bottles' engine poses are stale: they are compared with each
-        other here, as upright cylinders; two may touch only as a train does — they touched when
-        they went free, at one velocity, and are no deeper into each other than then."""
+        SLIDE_INTO then, and no deeper into it since than SLIDE_DEPTH. Free bottles' engine poses
+        are stale: they are compared with each other here, as upright cylinders; two may touch
+        only as a train does — they touched when they went free, at one velocity, and are no
+        deeper into each other than then."""
         b, client = self.bodies, self.engine.client
         rows = self.rows.tolist()
         skip = floors | {b.ids[n] for n in rows} | {b.ids[n] for n in held}
