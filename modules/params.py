@@ -18,6 +18,6 @@ TRANSPORT = {
     "transport": {"enum": ["engine", "exact"], "default": "engine",
                   "description": "engine: the engine moves it throughout; exact: riding a belt with nothing within "
                                  "reach it leaves the engine and follows the belt's law in numpy (free transport)"},
-    "lookahead": {"type": "integer", "minimum": 2, "default": 4,
+    "lookahead": {"type": "integer", "minimum": 2, "default": 6,
                   "description": "transport exact: ticks its tests look forward; they are taken every lookahead − 1 ticks"},
 }

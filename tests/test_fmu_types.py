@@ -6,10 +6,12 @@ headers): `enum2` (FMI 2.0) has an Enumeration input whose legal values are 1..3
 structural parameter.
 """
 import csv
+from math import copysign
 
 import pytest
 
 from hub.core.errors import ScenarioError, SimulationError
+from hub.logic.fmi import FmuSlave, inspect_fmu
 from hub.scenario.checker import load_scenario
 
 from .foreign_fmus import build
@@ -232,3 +234,19 @@ def test_a_real_beyond_float32_is_named_when_written(foreign, write_scenario, tm
     message = str(info.value)
     assert message.startswith("FMU instance 'c' (typed3.fmu) at t = 0.2 s: set inputs failed: input 'x32' (Float32): ")
     assert message.endswith(" is outside its range -3.40282e+38 … 3.40282e+38")
+
+
+def test_inputs_set_again_unchanged_are_held_and_a_zero_changing_sign_is_written(foreign):
+    """The adapter does not write inputs the FMU already holds, bit for bit: the FMU steps on them
+    as set; 0.0 and −0.0 compare equal but are not the same input, and the FMU sees the change."""
+    slave = FmuSlave(inspect_fmu(foreign["typed3"]), "t", ["x32"], ["y32"], {})
+    try:
+        t = 0.0
+        for x in (2.0, 2.0, 0.0, -0.0, -0.0, 0.0, 4.0, 4.0):
+            slave.set_inputs([x])
+            slave.step(t, 0.1)
+            t += 0.1
+            y = slave.outputs()[0]
+            assert (y, copysign(1.0, y)) == (1.5 * x, copysign(1.0, x)), f"x32 = {x!r} gave y32 = {y!r}"
+    finally:
+        slave.close()

@@ -14,7 +14,7 @@ it had stay as they were when it left, its vertical velocity and spin are zero.
 In the engine a free bottle is out of play as a parked or resting one is (parking.py, rest.py):
 collision off, asleep, its pose there stale. It re-enters — its exact pose and velocity put
 back, collision on, awake — before the tick at which anything could touch it. "Anything" by
-three tests, each looking a number of ticks forward (the bottle's `lookahead`, default 4):
+three tests, each looking a number of ticks forward (the bottle's `lookahead`, default 6):
 
 - bodies: every other body in play (awake, resting, free, just put down). Two steady bottles
   (free, or upright and hardly rocking in the engine) by their footprints — the gap between
@@ -80,7 +80,7 @@ SLIDE = 1e-9          # m: most a bottle sliding along a box's face may come nea
 SLIDE_INTO = SHAPE_MARGIN   # m: a bottle reaching further than this into a box does not slide along it
 SLIDE_DEPTH = 1e-6    # m: most `check` lets a sliding bottle go deeper into the face over a run (SLIDE a look)
 FALL = 9.81           # m/s²: what two steady bodies' heights may close at, beyond their vertical speeds
-LOOKAHEAD = 4         # ticks a free bottle's tests look forward, by default
+LOOKAHEAD = 6         # ticks a free bottle's tests look forward, by default
 LONG = 4              # a whole look goes this many look-aheads forward where it can
 EVERY = 15            # ticks between two looks for bottles that may leave the engine
 RETRY = 15            # ticks before a bottle found near something is looked at again
@@ -228,11 +228,12 @@ class FreeTransport:
         else:   # free bottles follow laws the whole looks bound: only the pairs with `among`
             against = np.zeros(len(self.free), bool)
             against[among] = True
-        centres, extents = self._part_boxes(float(self.ahead[rows].max()) * times * self.dt)
+        centres, extents, growth = self._part_boxes()
         return _touching(rows, play, float(times), self.dt, positions, orientations, velocities, spins, b.radii,
                          b.half_heights, self.ahead, self.most, self.pulls, self.free,
                          self.free if joined is None else joined, against, fields.straight_law, fields.regions(),
-                         centres, extents)
+                         centres, _grown(extents, growth, self.ahead, np.asarray(rows, np.int64), float(times),
+                                         self.dt))
 
     def _trains(self, seeds: np.ndarray, pool: np.ndarray) -> np.ndarray:
         """`seeds` (a mask over bodies) grown by the bodies of `pool` (rows) whose footprints
@@ -253,17 +254,18 @@ class FreeTransport:
             _pulls(np.asarray(rows, np.int64), positions, velocities, self.bodies.masses, self.ahead, self.dt,
                    self.pulls, self.most, self.fields.regions(), self.fields.laws())
 
-    def _part_boxes(self, horizon: float) -> tuple[np.ndarray, np.ndarray]:
+    def _part_boxes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The moving parts' boxes (centres, half extents) as the wake rule widens them for one
-        tick, and headed `horizon` s further; while none moves, the same boxes at every look."""
+        tick, and how fast each half extent grows with the time a look goes forward (a part headed
+        on along its axis: `_grown`); while none moves, the same boxes at every look."""
         moving = self._moving
         if moving is None or not moving.parts:
-            return np.zeros((0, 3)), np.zeros((0, 3))
+            return _NO_PARTS
         if not moving.moving and self._parts_at_rest is not None:
             return self._parts_at_rest
         parts = [(p.box(), p) for p in moving.parts]
-        boxes = (np.array([box[0] for box, _ in parts], float),
-                 np.array([box[1] + np.abs(p.axis) * abs(p.velocity) * horizon for box, p in parts], float))
+        boxes = (np.array([box[0] for box, _ in parts], float), np.array([box[1] for box, _ in parts], float),
+                 np.array([np.abs(p.axis) * abs(p.velocity) for _, p in parts], float))
         self._parts_at_rest = None if moving.moving else boxes
         return boxes
 
@@ -310,32 +312,21 @@ class FreeTransport:
             positions = positions.copy()
             for n, centre in placed.items():
                 positions[n] = centre
-        state = positions, b.orientations, b.velocities, b.angular_velocities
-        self._pull_now(b.in_play_rows() if b.moved_rows is None else b.moved_rows, positions, b.velocities)
-        whole = placed or moving or self._everything
+        whole = bool(placed or moving or self._everything)
         self._everything = False
-        due = np.ones(len(rows), bool) if whole else self.clear[rows] < tick + ahead
-        back = np.zeros(len(rows), bool)
-        if not due.all() and len(awake):
-            # The others against the bodies awake in the engine only.
-            rest = ~due
-            back[rest] = self._touching(rows[rest], 1, *state, among=awake)
+        fields, fixed = self.fields, self._fixed
+        centres, extents, growth = self._part_boxes()
+        # One compiled call for the whole look (`_look`): its tests' arrays cross into it once.
+        due, back, ok, still, near, now = _look(
+            tick, whole, rows, b.in_play_rows() if b.moved_rows is None else b.moved_rows,
+            np.asarray(awake, np.int64), b.in_play_rows(), self.dt, positions, b.orientations, b.velocities,
+            b.angular_velocities, b.masses, b.radii, b.half_heights, self.ahead, self.most, self.pulls, self.clear,
+            self.free, fields.straight_law, fields.surfaces, fields.speeds, fields.regions(), fields.laws(),
+            centres, extents, growth, fixed is not None, self.listed_at, self.near, self.near_count,
+            *(fixed if fixed is not None else _NO_BOXES))
         settle = None
         if due.any():
             look = rows[due]
-            now = self.fields.which(positions[look])
-            # LONG looks ahead first; what that finds near is looked at one look-ahead forward.
-            ok, still, stays = self._on_belt(look, now, LONG, positions, b.velocities)
-            near = self._touching(look, LONG, *state) | self._fixed_hit(look, LONG, positions, b.velocities)
-            far = ok & stays & ~near
-            self.clear[look[far]] = tick + LONG * self.ahead[look[far]]
-            short = ~far
-            if short.any():
-                ok1, still1, _ = self._on_belt(look[short], now[short], 1, positions, b.velocities)
-                near1 = (self._touching(look[short], 1, *state)
-                         | self._fixed_hit(look[short], 1, positions, b.velocities))
-                ok[short], still[short], near[short] = ok1, still1, near1
-                self.clear[look[short]] = tick + self.ahead[look[short]]
             # One that stops on a still belt with nothing near rests at once, without the engine;
             # a train rests whole or not at all (the rest of it would ride on into the part at rest).
             settle = still & ~near & self.rest.allowed[look]
@@ -751,14 +742,27 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
     straight, its law scaled by the mass; `regions`: ForceFields.regions. Pairs by their bounds
     (rest.bound), found along the plant's longer axis from each row outwards, then as
     FreeTransport._touching says."""
-    count = play.shape[0]
+    farthest = 0.0
+    for q in range(play.shape[0]):
+        farthest = max(farthest, ahead[play[q]] * times)
+    # Only `rows` and the bodies they are looked at against are bounded and sorted (against the
+    # bodies awake in the engine: a third of those in play), in the order of `play`.
+    wanted = against.copy()
+    wanted[rows] = True
+    count = 0
+    for q in range(play.shape[0]):
+        count += wanted[play[q]]
+    kept = np.empty(count, np.int64)
+    count = 0
+    for q in range(play.shape[0]):
+        if wanted[play[q]]:
+            kept[count] = play[q]
+            count += 1
+    play = kept
     reaches = np.empty(count)
     steady = np.empty(count, np.bool_)
     belt = np.full(count, -2, np.int64)   # worked out for a body once a pair needs it (`_belt`)
     tilt = math.cos(TILT)
-    farthest = 0.0
-    for q in range(count):
-        farthest = max(farthest, ahead[play[q]] * times)
     for q in range(count):
         n = play[q]
         w = spins[n]
@@ -884,3 +888,94 @@ def _grow(out, pool, positions, radii, half_heights):
                     - radii[n] - radii[m] < 2.0 * SHAPE_MARGIN):
                 out[m] = True
                 stack.append(m)
+
+
+@njit(cache=True)
+def _grown(extents, growth, ahead, rows, times, dt):
+    """The moving parts' half extents headed as far as the furthest look of `rows` goes."""
+    farthest = 0.0
+    for n in rows:
+        farthest = max(farthest, ahead[n])
+    return extents + growth * (farthest * times * dt)
+
+
+@njit(cache=True)
+def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, velocities, spins, masses, radii,
+          half_heights, ahead, most, pulls, clear, free, straight_law, surfaces, speeds, regions, laws, part_centres,
+          part_extents, part_growth, has_fixed, listed_at, near_list, near_count, c, h, cos, sin):
+    """FreeTransport.release_near's look at the free `rows`, in one call: every pull taken afresh
+    (`_pulls`, for `pulled`); the rows not due for a whole look against the bodies `awake` in
+    the engine; those due (all when `whole`) LONG look-aheads forward, and what that finds near
+    one look-ahead forward, each by `_on_belt`, `_touching` and `_fixed_hit`, with `clear` set to
+    the tick their look holds to. Returns (due, back, ok, still, near, now): per row whether it
+    was due and whether the look against the awake bodies found it near; per row due, riding on
+    (ok), coming to a stop on a still belt (still), near something (near), and its field now."""
+    most[:] = 0.0
+    if pulled.shape[0]:
+        _pulls(pulled, positions, velocities, masses, ahead, dt, pulls, most, regions, laws)
+    count = rows.shape[0]
+    due = np.empty(count, np.bool_)
+    for i in range(count):
+        due[i] = whole or clear[rows[i]] < tick + ahead[rows[i]]
+    back = np.zeros(count, np.bool_)
+    others = rows[~due]
+    if others.shape[0] and awake.shape[0]:
+        against = np.zeros(free.shape[0], np.bool_)
+        against[awake] = True
+        found = _touching(others, play, 1.0, dt, positions, orientations, velocities, spins, radii, half_heights,
+                          ahead, most, pulls, free, free, against, straight_law, regions, part_centres,
+                          _grown(part_extents, part_growth, ahead, others, 1.0, dt))
+        k = 0
+        for i in range(count):
+            if not due[i]:
+                back[i] = found[k]
+                k += 1
+    look = rows[due]
+    m = look.shape[0]
+    ok, still, near = np.zeros(m, np.bool_), np.zeros(m, np.bool_), np.zeros(m, np.bool_)
+    now = np.full(m, -1, np.int64)
+    if m == 0:
+        return due, back, ok, still, near, now
+    for i in range(m):
+        n = look[i]
+        now[i] = field_at(positions[n, 0], positions[n, 1], positions[n, 2], *regions)
+    everyone = np.ones(free.shape[0], np.bool_)
+    # LONG look-aheads forward first, then what that finds near, or off its belt, one forward.
+    ok, still, stays = _on_belt(look, now, float(LONG), dt, positions, velocities, pulls, ahead, surfaces, speeds,
+                                regions)
+    near = _near(look, float(LONG), play, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
+                 most, pulls, free, everyone, straight_law, regions, part_centres, part_extents, part_growth,
+                 has_fixed, listed_at, near_list, near_count, c, h, cos, sin)
+    for i in range(m):
+        clear[look[i]] = tick + LONG * ahead[look[i]]
+    short = np.flatnonzero(~ok | ~stays | near)
+    if short.shape[0]:
+        these = look[short]
+        ok1, still1, _ = _on_belt(these, now[short], 1.0, dt, positions, velocities, pulls, ahead, surfaces, speeds,
+                                  regions)
+        near1 = _near(these, 1.0, play, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
+                      most, pulls, free, everyone, straight_law, regions, part_centres, part_extents, part_growth,
+                      has_fixed, listed_at, near_list, near_count, c, h, cos, sin)
+        for j in range(short.shape[0]):
+            i = short[j]
+            ok[i], still[i], near[i] = ok1[j], still1[j], near1[j]
+            clear[look[i]] = tick + ahead[look[i]]
+    return due, back, ok, still, near, now
+
+
+@njit(cache=True)
+def _near(rows, times, play, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most, pulls,
+          free, against, straight_law, regions, part_centres, part_extents, part_growth, has_fixed, listed_at,
+          near_list, near_count, c, h, cos, sin):
+    """`_touching` or `_fixed_hit`, for `_look`."""
+    near = _touching(rows, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
+                     most, pulls, free, free, against, straight_law, regions, part_centres,
+                     _grown(part_extents, part_growth, ahead, rows, times, dt))
+    if has_fixed:
+        near = near | _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at,
+                                 near_list, near_count, straight_law, regions, c, h, cos, sin)
+    return near
+
+
+_NO_PARTS = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
+_NO_BOXES = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0))
