@@ -191,14 +191,6 @@ class FreeTransport:
                           self.ahead, b.radii, b.half_heights, self.listed_at, self.near, self.near_count,
                           self.fields.straight_law, self.fields.regions(), *self._fixed)
 
-    def steady(self, rows, orientations, velocities, spins) -> np.ndarray:
-        """(len(rows),): upright and steady as a riding bottle is (tilt under TILT, spin under
-        SPIN, vertical speed under RISE), or free."""
-        x, y = orientations[rows, 0], orientations[rows, 1]
-        w = spins[rows]
-        return (((1.0 - 2.0 * (x * x + y * y) > np.cos(TILT)) & ((w * w).sum(axis=1) < SPIN * SPIN)
-                 & (np.abs(velocities[rows, 2]) < RISE)) | self.free[rows])
-
     def _touching(self, rows, times: int, positions, orientations, velocities, spins, among=None,
                   joined=None) -> np.ndarray:
         """(len(rows),): whether each of `rows` could touch another body in play (or of `among`)
@@ -278,13 +270,6 @@ class FreeTransport:
         fields = self.fields
         return _on_belt(np.asarray(rows, np.int64), np.asarray(now, np.int64), float(times), self.dt, positions,
                         velocities, self.pulls, self.ahead, fields.surfaces, fields.speeds, fields.regions())
-
-    def _fields(self, rows, read_rows, under, positions) -> np.ndarray:
-        """The field under each of `rows` as the last read found it (`under`, per `read_rows`),
-        or looked up afresh when the row sets changed since."""
-        if under is None or (self.bodies.stale and read_rows is not None):
-            return self.fields.which(positions[rows])
-        return under[rows] if read_rows is None else under[np.searchsorted(read_rows, rows)]
 
     # --- before a tick: who must come back ------------------------------------------------
     def release_near(self, tick: int, placed: dict, moving: bool, awake: np.ndarray) -> None:
@@ -393,13 +378,12 @@ class FreeTransport:
         b = self.bodies
         # The pull each gets at the belt's new speed (a resting body's is from before it rested).
         moving = b.in_play_rows() if b.moved_rows is None else b.moved_rows
-        self._pull_now(np.union1d(moving, rows), b.positions, b.velocities)
         # Standing still together, they may set off as trains (_touching): those that stay must
         # keep their trains with them.
         candidates = rows[self.allowed[rows]]
         joined = self.free.copy()
         joined[candidates] = True
-        go = self._leaving(candidates, joined=joined)[0]
+        go = self._leaving(candidates, np.union1d(moving, rows), joined)[0]
         stay = np.zeros(len(joined), bool)
         stay[candidates] = True
         stay[go] = False
@@ -431,8 +415,8 @@ class FreeTransport:
             rows = rows[~np.isin(rows, held)]
         if len(rows) == 0:
             return
-        self._pull_now(b.in_play_rows() if b.moved_rows is None else b.moved_rows, b.positions, b.velocities)
-        go, near = self._leaving(rows, b.live_rows, b.under)     # no trains: none of `rows` is joined
+        # No trains: none of `rows` is joined.
+        go, near = self._leaving(rows, b.in_play_rows() if b.moved_rows is None else b.moved_rows, self.free)
         self.next_try[near] = tick + RETRY
         if len(go) == 0:
             return
@@ -445,30 +429,20 @@ class FreeTransport:
         self.entered += len(go)
         self._changed()
 
-    def _leaving(self, rows, read_rows=None, under=None, joined=None) -> tuple[np.ndarray, np.ndarray]:
+    def _leaving(self, rows, pulled, joined) -> tuple[np.ndarray, np.ndarray]:
         """(go, near): of `rows`, those upright and steady, standing on a belt (base within SINK
         of its surface) and passing the tests `2·ahead` ticks forward; and those that ride a belt
-        but are near something (`joined`: who may form a train, by default the free)."""
-        b = self.bodies
-        p, q, v, w = b.positions, b.orientations, b.velocities, b.angular_velocities
-        none = rows[:0]
-        rows = rows[self.steady(rows, q, v, w)]
-        if len(rows) == 0:
-            return none, none
-        field = self._fields(rows, read_rows, under, p)
-        on = field >= 0
-        rows, field = rows[on], field[on]
-        base = p[rows, 2] - b.half_heights[rows]
-        level = np.abs(base - self.fields.surfaces[field]) < SINK
-        rows, field = rows[level], field[level]
-        if len(rows) == 0:
-            return none, none
-        rows = rows[self._on_belt(rows, field, 2, p, v)[0]]     # twice the look-ahead, as below
-        if len(rows) == 0:
-            return none, none
-        near = self._touching(rows, 2, p, q, v, w, joined=joined)
-        near[~near] = self._fixed_hit(rows[~near], 2, p, v)
-        return rows[~near], rows[near]
+        but are near something (`joined`: who may form a train). Every pull is taken afresh
+        first, for `pulled` (`_pull_now`). One compiled call (`_leave`)."""
+        b, fields, fixed = self.bodies, self.fields, self._fixed
+        centres, extents, growth = self._part_boxes()
+        go, near = _leave(np.asarray(rows, np.int64), np.asarray(pulled, np.int64), b.in_play_rows(), self.dt,
+                          b.positions, b.orientations, b.velocities, b.angular_velocities, b.masses, b.radii,
+                          b.half_heights, self.ahead, self.most, self.pulls, self.free, joined, fields.straight_law,
+                          fields.surfaces, fields.speeds, fields.regions(), fields.laws(), centres, extents, growth,
+                          fixed is not None, self.listed_at, self.near, self.near_count,
+                          *(fixed if fixed is not None else _NO_BOXES))
+        return rows[go], rows[near]
 
     # --- the tick itself --------------------------------------------------------------------
     def look_whole(self) -> None:
@@ -975,6 +949,54 @@ def _near(rows, times, play, dt, positions, orientations, velocities, spins, rad
         near = near | _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at,
                                  near_list, near_count, straight_law, regions, c, h, cos, sin)
     return near
+
+
+@njit(cache=True)
+def _leave(rows, pulled, play, dt, positions, orientations, velocities, spins, masses, radii, half_heights, ahead,
+           most, pulls, free, joined, straight_law, surfaces, speeds, regions, laws, part_centres, part_extents,
+           part_growth, has_fixed, listed_at, near_list, near_count, c, h, cos, sin):
+    """FreeTransport._leaving in one call: every pull afresh (`_pulls`, for `pulled`), then of
+    `rows` those steady (FreeTransport.steady) with their base on a belt's surface, on it 2 ×
+    their look-ahead forward (`_on_belt`), and touching nothing then (`_touching`, `_fixed_hit`):
+    masks over `rows` of those that go and those near something."""
+    most[:] = 0.0
+    if pulled.shape[0]:
+        _pulls(pulled, positions, velocities, masses, ahead, dt, pulls, most, regions, laws)
+    count = rows.shape[0]
+    tilt = math.cos(TILT)
+    riding = np.zeros(count, np.bool_)
+    field = np.full(count, -1, np.int64)
+    for i in range(count):
+        n = rows[i]
+        x, y, w = orientations[n, 0], orientations[n, 1], spins[n]
+        if not (free[n] or (1.0 - 2.0 * (x * x + y * y) > tilt and w[0] * w[0] + w[1] * w[1] + w[2] * w[2] < SPIN * SPIN
+                            and abs(velocities[n, 2]) < RISE)):
+            continue
+        k = field_at(positions[n, 0], positions[n, 1], positions[n, 2], *regions)
+        if k >= 0 and abs(positions[n, 2] - half_heights[n] - surfaces[k]) < SINK:
+            riding[i], field[i] = True, k
+    these = rows[riding]
+    ok = _on_belt(these, field[riding], 2.0, dt, positions, velocities, pulls, ahead, surfaces, speeds, regions)[0]
+    go, near = np.zeros(count, np.bool_), np.zeros(count, np.bool_)
+    these = these[ok]
+    if these.shape[0] == 0:
+        return go, near
+    close = _touching(these, play, 2.0, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
+                      most, pulls, free, joined, np.ones(free.shape[0], np.bool_), straight_law, regions, part_centres,
+                      _grown(part_extents, part_growth, ahead, these, 2.0, dt))
+    if has_fixed and not close.all():
+        rest = these[~close]
+        hit = _fixed_hit(rest, 2.0, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at, near_list,
+                         near_count, straight_law, regions, c, h, cos, sin)
+        k = 0
+        for j in range(close.shape[0]):
+            if not close[j]:
+                close[j] = hit[k]
+                k += 1
+    at = np.flatnonzero(riding)[ok]
+    for j in range(at.shape[0]):
+        go[at[j]], near[at[j]] = not close[j], close[j]
+    return go, near
 
 
 _NO_PARTS = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))

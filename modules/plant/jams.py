@@ -1,9 +1,11 @@
 """Jams: a bottle standing still on a running belt for longer than `run.jam_after`, unless a closed gate holds it on purpose."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 TOUCH = 0.003        # m: a bottle this close to a gate, or to a bottle held at one, is held too
 CHECK_PERIOD = 0.1   # s of simulated time between two looks (at the first point at or after each)
@@ -100,20 +102,23 @@ class JamWatch:
         held = self.holders.depths(p, r, h) > -TOUCH if self.holders is not None else np.zeros(len(bodies), bool)
         if not held.any():
             return held
-        # The queues: groups of touching bottles, each labelled by one of its members (min-label
-        # propagation with pointer jumping: a few rounds even for a long queue).
-        d = p[:, None, :2] - p[None, :, :2]
-        touching = np.hypot(d[..., 0], d[..., 1]) <= r[:, None] + r[None, :] + TOUCH
-        label = np.arange(len(bodies))
-        while True:
-            lower = np.minimum(label, np.where(touching, label[None, :], len(bodies)).min(axis=1))
-            lower = lower[lower]
-            if (lower == label).all():
-                queues = np.zeros(len(bodies), bool)   # the labels of queues with a held member (np.isin, cheaper)
-                queues[label[held]] = True
-                return queues[label]
-            label = lower
+        # The queues: the bottles reached from a held one through bottles touching in turn.
+        return _queues(p, r, held)
 
     def jams(self) -> list[Jam]:
         """Every jam so far, in the order they became jams."""
         return list(self.found)
+
+
+@njit(cache=True)
+def _queues(p, r, held):
+    """`held` grown by every body whose footprint comes within TOUCH of one it holds, in turn."""
+    out = held.copy()
+    stack = [i for i in range(p.shape[0]) if held[i]]
+    while stack:
+        i = stack.pop()
+        for j in range(p.shape[0]):
+            if not out[j] and math.hypot(p[i, 0] - p[j, 0], p[i, 1] - p[j, 1]) <= r[i] + r[j] + TOUCH:
+                out[j] = True
+                stack.append(j)
+    return out
