@@ -166,9 +166,9 @@ class Bottles:
         apply, frame = pybullet.applyExternalForce, pybullet.WORLD_FRAME
         for target, x, y, at in zip(targets[bodies].tolist(), fx.tolist(), fy.tolist(), points.tolist()):
             apply(target, -1, (x, y, 0.0), at, frame, client)
-        # The surface also grips the base against spinning; only bottles that spin get a call.
-        spinning = np.flatnonzero(torques)
-        if len(spinning):
-            twist = pybullet.applyExternalTorque
-            for target, torque in zip(ids[bodies[spinning]].tolist(), torques[spinning].tolist()):
+        # The surface also grips the base against spinning; only bottles that spin get a call (a
+        # handful of bodies: plain lists cost less than numpy's selection).
+        twist = pybullet.applyExternalTorque
+        for target, torque in zip(ids[bodies].tolist(), torques.tolist()):
+            if torque:
                 twist(target, -1, (0.0, 0.0, torque), frame, client)
