@@ -212,12 +212,8 @@ class Rest:
         resting, centres, extents = self._resting_set(positions)
         if len(resting) == 0 or len(awake) == 0:
             return resting[:0]
-        near = self._near(centres, extents, awake, positions, velocities, spins)
-        if len(near) == 0:
-            return resting[:0]
-        seeds = _seeds(near, positions, orientations, velocities, spins, self.radii, self.half_heights, self.dt,
-                       np.ascontiguousarray(centres), extents)
-        return self._group(seeds, positions) if seeds.any() else resting[:0]
+        return resting[_woken(np.asarray(awake, np.int64), positions, orientations, velocities, spins, self.radii,
+                              self.half_heights, self.dt, np.ascontiguousarray(centres), extents)]
 
     def joining(self, centres, extents, positions) -> np.ndarray:
         """The resting rows (and their groups) whose boxes overlap any of the boxes (centres, extents)."""
@@ -304,6 +300,25 @@ def _within(rows, positions, velocities, spins, radii, half_heights, dt, centres
                 near[i] = True
                 break
     return near
+
+
+@njit(cache=True)
+def _woken(awake, positions, orientations, velocities, spins, radii, half_heights, dt, centres, extents):
+    """Rest.woken_by in one call, over the resting boxes (centres, extents): the awake bodies
+    whose bound comes near one (`_within`), the resting boxes their boxes overlap (`_seeds`), and
+    every resting box joined to one of those through resting boxes that overlap in turn."""
+    near = awake[_within(awake, positions, velocities, spins, radii, half_heights, dt, centres, extents)]
+    woken = _seeds(near, positions, orientations, velocities, spins, radii, half_heights, dt, centres, extents)
+    stack = [m for m in range(centres.shape[0]) if woken[m]]
+    while stack:
+        m = stack.pop()
+        for k in range(centres.shape[0]):
+            if (not woken[k] and abs(centres[m, 0] - centres[k, 0]) - extents[m, 0] - extents[k, 0] < 0.0
+                    and abs(centres[m, 1] - centres[k, 1]) - extents[m, 1] - extents[k, 1] < 0.0
+                    and abs(centres[m, 2] - centres[k, 2]) - extents[m, 2] - extents[k, 2] < 0.0):
+                woken[k] = True
+                stack.append(k)
+    return woken
 
 
 @njit(cache=True)
