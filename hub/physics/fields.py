@@ -73,6 +73,7 @@ class ForceFields:
         self.limits = np.zeros(0)      # most acceleration friction can give, m/s² (inf: none)
         self.surfaces = np.zeros(0)    # height of the belt's surface, m (its centre line's)
         self.straight_law = np.zeros(0, bool)
+        self._regions = self._laws = None   # the tuples compiled loops take, until a region is added
 
     def __len__(self) -> int:
         return len(self.lines)
@@ -102,6 +103,7 @@ class ForceFields:
         # Two bottles on it follow one law that never lets their velocities part (transport.py):
         # not on an arc, nor with the gain per body, nor with the explicit law (unstable past k·dt = 2).
         self.straight_law = ~self.lines.is_arc & self.per_mass & (not self.explicit)
+        self._regions = self._laws = None
         return index
 
     def set_speed(self, field: int, speed: float) -> None:
@@ -125,7 +127,13 @@ class ForceFields:
         return _nearest(np.ascontiguousarray(points, float), *self.regions())
 
     def regions(self) -> tuple:
-        """The regions as compiled loops take them (`field_at`): centre lines, half widths, heights."""
+        """The regions as compiled loops take them (`field_at`): centre lines, half widths, heights
+        (one tuple, made again only after a region is added: a speed is set in place)."""
+        if self._regions is None:
+            self._regions = self._make_regions()
+        return self._regions
+
+    def _make_regions(self) -> tuple:
         lines = self.lines
         return (lines.origin, lines.cos, lines.sin, lines.is_arc, lines.turn, lines.radius, lines.angle0,
                 lines.length, self.half_widths, self.z_lo, self.z_hi)
@@ -160,7 +168,12 @@ class ForceFields:
                       np.ascontiguousarray(radii, float), np.ascontiguousarray(spins, float), *self.laws())
 
     def laws(self) -> tuple:
-        """The belts' laws as compiled loops take them (`law_at`)."""
+        """The belts' laws as compiled loops take them (`law_at`; kept as `regions` is)."""
+        if self._laws is None:
+            self._laws = self._make_laws()
+        return self._laws
+
+    def _make_laws(self) -> tuple:
         lines = self.lines
         return (self.dt, self.explicit, self.rates, self.per_mass, self.speeds, self.surface, self.limits,
                 lines.is_arc, lines.origin, lines.cos, lines.sin, lines.turn, lines.radius)
