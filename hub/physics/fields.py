@@ -12,6 +12,12 @@ GRIPS = ("surface", "along")
 INTEGRATORS = ("exact", "explicit")
 SPIN_AT_REST = 0.01   # rad/s: a bottle spinning slower than this about the vertical is left alone
 
+# The columns of the regions' table (ForceFields.table), one row a region: what compiled loops
+# take as one array — a compiled call pays for each array it is given, and the most after the
+# engine's step has cleared the caches (30 arrays: 15 µs a call, one: 6).
+OX, OY, COS, SIN, ARC, TURN, RADIUS, ANGLE0, LENGTH, HALF_WIDTH, Z_LO, Z_HI, RATE, PER_MASS, SPEED, SURFACE, LIMIT \
+    = range(17)
+
 
 class ForceFields:
     """Belt regions — a band either side of a straight or arc centre line, from `z_lo` to `z_hi` —
@@ -73,7 +79,7 @@ class ForceFields:
         self.limits = np.zeros(0)      # most acceleration friction can give, m/s² (inf: none)
         self.surfaces = np.zeros(0)    # height of the belt's surface, m (its centre line's)
         self.straight_law = np.zeros(0, bool)
-        self._regions = self._laws = None   # the tuples compiled loops take, until a region is added
+        self._table = None   # the regions as one array for compiled loops, until a region is added
 
     def __len__(self) -> int:
         return len(self.lines)
@@ -103,11 +109,13 @@ class ForceFields:
         # Two bottles on it follow one law that never lets their velocities part (transport.py):
         # not on an arc, nor with the gain per body, nor with the explicit law (unstable past k·dt = 2).
         self.straight_law = ~self.lines.is_arc & self.per_mass & (not self.explicit)
-        self._regions = self._laws = None
+        self._table = None
         return index
 
     def set_speed(self, field: int, speed: float) -> None:
         self.speeds[field] = speed
+        if self._table is not None:
+            self._table[field, SPEED] = speed
 
     def locate(self, points: np.ndarray):
         """For points (N,3): (field index or −1, along, across), each (N,), by the rule above."""
@@ -127,16 +135,26 @@ class ForceFields:
         return _nearest(np.ascontiguousarray(points, float), *self.regions())
 
     def regions(self) -> tuple:
-        """The regions as compiled loops take them (`field_at`): centre lines, half widths, heights
-        (one tuple, made again only after a region is added: a speed is set in place)."""
-        if self._regions is None:
-            self._regions = self._make_regions()
-        return self._regions
+        """The regions as compiled loops take them (`field_at`): the table."""
+        return (self.table(),)
 
-    def _make_regions(self) -> tuple:
-        lines = self.lines
-        return (lines.origin, lines.cos, lines.sin, lines.is_arc, lines.turn, lines.radius, lines.angle0,
-                lines.length, self.half_widths, self.z_lo, self.z_hi)
+    def table(self) -> np.ndarray:
+        """(regions, 17): every region's centre line, half width, heights and law, in the columns
+        named above (booleans as 0 and 1) — made again only after a region is added; a speed is
+        set in it as in `speeds`."""
+        if self._table is None:
+            lines, n = self.lines, len(self.lines)
+            table = np.zeros((n, 17))
+            if n:
+                table[:, OX], table[:, OY] = lines.origin[:, 0], lines.origin[:, 1]
+            for column, values in ((COS, lines.cos), (SIN, lines.sin), (ARC, lines.is_arc), (TURN, lines.turn),
+                                   (RADIUS, lines.radius), (ANGLE0, lines.angle0), (LENGTH, lines.length),
+                                   (HALF_WIDTH, self.half_widths), (Z_LO, self.z_lo), (Z_HI, self.z_hi),
+                                   (RATE, self.rates), (PER_MASS, self.per_mass), (SPEED, self.speeds),
+                                   (SURFACE, self.surface), (LIMIT, self.limits)):
+                table[:, column] = values
+            self._table = table
+        return self._table
 
     def forces(self, points: np.ndarray, velocities: np.ndarray, masses: np.ndarray):
         """Return (body indices, forces (M,3)) for the bodies whose point lies in some field."""
@@ -168,15 +186,8 @@ class ForceFields:
                       np.ascontiguousarray(radii, float), np.ascontiguousarray(spins, float), *self.laws())
 
     def laws(self) -> tuple:
-        """The belts' laws as compiled loops take them (`law_at`; kept as `regions` is)."""
-        if self._laws is None:
-            self._laws = self._make_laws()
-        return self._laws
-
-    def _make_laws(self) -> tuple:
-        lines = self.lines
-        return (self.dt, self.explicit, self.rates, self.per_mass, self.speeds, self.surface, self.limits,
-                lines.is_arc, lines.origin, lines.cos, lines.sin, lines.turn, lines.radius)
+        """The belts' laws as compiled loops take them (`law_at`): dt, the explicit law or not, the table."""
+        return (self.dt, self.explicit, self.table())
 
     def spin_torques(self, f: np.ndarray, spin: np.ndarray, masses: np.ndarray, radii: np.ndarray) -> np.ndarray:
         """Torques about the vertical (M,) with which a belt's surface grips the base of bottles
@@ -191,104 +202,103 @@ class ForceFields:
         turn about its own axis shows nowhere (it is round, its sensors read positions), while
         a spinning bottle's slight rocking grows in the engine (the paper's loop, 50 s: tilt
         0.6° without spin, 1.6° spun with each curve)."""
-        return np.array([spin_torque_at(k, w, m, r, self.dt, self.explicit, self.rates, self.per_mass, self.surface,
-                                        self.limits)
+        return np.array([spin_torque_at(k, w, m, r, *self.laws())
                          for k, w, m, r in zip(np.asarray(f).tolist(), np.asarray(spin, float).tolist(),
                                                np.asarray(masses, float).tolist(), np.asarray(radii, float).tolist())])
 
 
 @njit(cache=True)
-def _nearest(points, origin, cos, sin, is_arc, turn, radius, angle0, length, half_width, z_lo, z_hi):
+def _nearest(points, table):
     """Per point (N,3): `field_at`."""
     out = np.empty(points.shape[0], np.int64)
     for i in range(points.shape[0]):
-        out[i] = field_at(points[i, 0], points[i, 1], points[i, 2], origin, cos, sin, is_arc, turn, radius, angle0,
-                          length, half_width, z_lo, z_hi)
+        out[i] = field_at(points[i, 0], points[i, 1], points[i, 2], table)
     return out
 
 
 @njit(cache=True)
-def field_at(x, y, z, origin, cos, sin, is_arc, turn, radius, angle0, length, half_width, z_lo, z_hi):
+def field_at(x, y, z, table):
     """The region the point (x, y, z) lies in whose centre line is nearest (the first on a tie),
-    or −1 — CentreLines.local's coordinates, region by region. The arrays: `ForceFields.regions`."""
+    or −1 — CentreLines.local's coordinates, region by region. `table`: ForceFields.table."""
     best, found = np.inf, -1
-    for k in range(origin.shape[0]):
-        if z < z_lo[k] or z > z_hi[k]:
+    for k in range(table.shape[0]):
+        if z < table[k, Z_LO] or z > table[k, Z_HI]:
             continue
-        dx, dy = x - origin[k, 0], y - origin[k, 1]
-        if is_arc[k]:
-            across = turn[k] * (radius[k] - math.hypot(dx, dy))
-            if abs(across) > half_width[k]:
+        dx, dy = x - table[k, OX], y - table[k, OY]
+        if table[k, ARC]:
+            radius = table[k, RADIUS]
+            across = table[k, TURN] * (radius - math.hypot(dx, dy))
+            if abs(across) > table[k, HALF_WIDTH]:
                 continue          # off the ring: no angle needed
-            along = ((turn[k] * (math.atan2(dy, dx) - angle0[k])) % TAU) * radius[k]
+            along = ((table[k, TURN] * (math.atan2(dy, dx) - table[k, ANGLE0])) % TAU) * radius
         else:
-            along = cos[k] * dx + sin[k] * dy
-            across = cos[k] * dy - sin[k] * dx
+            along = table[k, COS] * dx + table[k, SIN] * dy
+            across = table[k, COS] * dy - table[k, SIN] * dx
         distance = abs(across)
-        if 0.0 <= along < length[k] and distance <= half_width[k] and distance < best:
+        if 0.0 <= along < table[k, LENGTH] and distance <= table[k, HALF_WIDTH] and distance < best:
             best, found = distance, k
     return found
 
 
 @njit(cache=True)
-def _drive(f, points, velocities, masses, radii, spins, dt, explicit, rates, per_mass, speeds, surface, limits,
-           is_arc, origin, cos, sin, turn, radius):
+def _drive(f, points, velocities, masses, radii, spins, dt, explicit, table):
     """ForceFields.drive, body by body."""
     n = f.shape[0]
     fx, fy, torques = np.empty(n), np.empty(n), np.empty(n)
     for i in range(n):
         x, y = law_at(f[i], points[i, 0], points[i, 1], velocities[i, 0], velocities[i, 1], masses[i], dt, explicit,
-                      rates, per_mass, speeds, surface, limits, is_arc, origin, cos, sin, turn, radius)
+                      table)
         per_second = masses[i] / dt
         fx[i], fy[i] = x * per_second, y * per_second
-        torques[i] = spin_torque_at(f[i], spins[i], masses[i], radii[i], dt, explicit, rates, per_mass, surface, limits)
+        torques[i] = spin_torque_at(f[i], spins[i], masses[i], radii[i], dt, explicit, table)
     return fx, fy, torques
 
 
 @njit(cache=True)
-def spin_torque_at(k, spin, mass, radius, dt, explicit, rates, per_mass, surface, limits):
+def spin_torque_at(k, spin, mass, radius, dt, explicit, table):
     """ForceFields.spin_torques for one body on field `k`."""
-    if not surface[k] or abs(spin) <= SPIN_AT_REST:
+    if not table[k, SURFACE] or abs(spin) <= SPIN_AT_REST:
         return 0.0
-    rate = rates[k] if per_mass[k] else rates[k] / mass
+    rate = table[k, RATE] if table[k, PER_MASS] else table[k, RATE] / mass
     keep = 1.0 - rate * dt if explicit else math.exp(-rate * dt)
     torque = -spin * (1.0 - keep) * (mass * radius * radius / 2.0) / dt   # the homogeneous cylinder's inertia
-    most = (2.0 / 3.0) * limits[k] * mass * radius
+    most = (2.0 / 3.0) * table[k, LIMIT] * mass * radius
     return min(max(torque, -most), most)
 
 
 @njit(cache=True)
-def law_at(k, px, py, vx, vy, mass, dt, explicit, rates, per_mass, speeds, surface, limits, is_arc, origin, cos, sin,
-           turn, radius):
+def law_at(k, px, py, vx, vy, mass, dt, explicit, table):
     """The velocity change (dvx, dvy) field `k`'s law gives a body at (px, py) moving at (vx, vy)
-    in one tick (ForceFields.drive, FreeTransport.advance); the arrays after `mass`: `ForceFields.laws`."""
-    rate = rates[k] if per_mass[k] else rates[k] / mass
+    in one tick (ForceFields.drive, FreeTransport.advance); after `mass`: `ForceFields.laws`."""
+    rate = table[k, RATE] if table[k, PER_MASS] else table[k, RATE] / mass
     keep = 1.0 - rate * dt if explicit else math.exp(-rate * dt)
-    speed = speeds[k]
-    tx, ty = cos[k], sin[k]                 # direction of travel (the tangent on a curve)
+    speed = table[k, SPEED]
+    tx, ty = table[k, COS], table[k, SIN]   # direction of travel (the tangent on a curve)
     rx = ry = 0.0
-    if is_arc[k]:
-        rx, ry = px - origin[k, 0], py - origin[k, 1]
+    arc, turn = table[k, ARC], table[k, TURN]
+    if arc:
+        rx, ry = px - table[k, OX], py - table[k, OY]
         rho = max(math.hypot(rx, ry), 1e-12)
-        tx, ty = -turn[k] * ry / rho, turn[k] * rx / rho
-    if not surface[k]:
+        tx, ty = -turn * ry / rho, turn * rx / rho
+    if not table[k, SURFACE]:
         # along: only the component on the belt direction relaxes.
         u = (speed - (vx * tx + vy * ty)) * (1.0 - keep)
         x, y = u * tx, u * ty
-    elif not is_arc[k]:
+    elif not arc:
         # A straight belt's surface moves at speed·d: the relative velocity decays.
         gone = 1.0 - keep
         x, y = (speed * tx - vx) * gone, (speed * ty - vy) * gone
     else:
         # In the surface's frame: rotate by ω·dt about the centre; w carries a surface point
         # where the surface moves it in one tick.
-        angle = turn[k] * speed / radius[k] * dt
+        angle = turn * speed / table[k, RADIUS] * dt
         c, s = math.cos(angle), math.sin(angle)
         wx, wy = (c * rx - s * ry - rx) / dt, (s * rx + c * ry - ry) / dt
         qx, qy = (c * vx - s * vy - wx) * keep, (s * vx + c * vy - wy) * keep
         x, y = wx + c * qx - s * qy - vx, wy + s * qx + c * qy - vy
-    if limits[k] < np.inf:
+    limit = table[k, LIMIT]
+    if limit < np.inf:
         # Friction gives at most μ·g: a bottle held back slides on the belt.
-        scale = min(1.0, limits[k] * dt / max(math.hypot(x, y), 1e-300))
+        scale = min(1.0, limit * dt / max(math.hypot(x, y), 1e-300))
         x, y = x * scale, y * scale
     return x, y

@@ -64,7 +64,7 @@ import numpy as np
 from numba import njit
 
 from hub.physics._quiet import quiet_stderr
-from hub.physics.fields import field_at, law_at
+from hub.physics.fields import ARC, field_at, law_at
 from hub.physics.rest import SHAPE_MARGIN, bound, boxes, extent, turning
 
 with quiet_stderr():
@@ -461,8 +461,7 @@ class FreeTransport:
         if len(rows) == 0:
             return
         b = self.bodies
-        _advance(rows, b.positions, b.orientations, b.velocities, b.masses, self.offsets, *self.fields.regions(),
-                 *self.fields.laws())
+        _advance(rows, b.positions, b.orientations, b.velocities, b.masses, self.offsets, *self.fields.laws())
 
     def _changed(self) -> None:
         self.rows = np.flatnonzero(self.free)
@@ -605,7 +604,7 @@ def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, surfaces
 def _pulls(rows, positions, velocities, masses, ahead, dt, pulls, most, regions, laws):
     """FreeTransport._pull_now, body by body: the law under each now (pulls), and the
     largest of it and the law where its way ends one, two and LONG look-aheads on (most)."""
-    is_arc = regions[3]
+    table = regions[0]
     for n in rows:
         x, y, z = positions[n, 0], positions[n, 1], positions[n, 2]
         vx, vy = velocities[n, 0], velocities[n, 1]
@@ -613,7 +612,7 @@ def _pulls(rows, positions, velocities, masses, ahead, dt, pulls, most, regions,
         for times in (0.0, 1.0, 2.0, float(LONG)):
             h = ahead[n] * times * dt
             k = field_at(x + vx * h, y + vy * h, z + velocities[n, 2] * h, *regions)
-            if times > 0.0 and k == here and (k < 0 or not is_arc[k]):
+            if times > 0.0 and k == here and (k < 0 or not table[k, ARC]):
                 continue        # the same straight belt: the same law at the same velocity
             dvx = dvy = 0.0
             if k >= 0:
@@ -626,23 +625,19 @@ def _pulls(rows, positions, velocities, masses, ahead, dt, pulls, most, regions,
 
 
 @njit(cache=True)
-def _advance(rows, positions, orientations, velocities, masses, offsets, origin, cos, sin, is_arc, turn, radius, angle0,
-             length, half_width, z_lo, z_hi, dt, explicit, rates, per_mass, speeds, surface, limits, l_is_arc, l_origin,
-             l_cos, l_sin, l_turn, l_radius):
+def _advance(rows, positions, orientations, velocities, masses, offsets, dt, explicit, table):
     """FreeTransport.advance, row by row: the field under its centre (`field_at`), the law's
     change at its grip point (`law_at`: its base is frames.base_points' with no spin), then
     x ← x + v·dt."""
     for n in rows:
-        k = field_at(positions[n, 0], positions[n, 1], positions[n, 2], origin, cos, sin, is_arc, turn, radius,
-                     angle0, length, half_width, z_lo, z_hi)
+        k = field_at(positions[n, 0], positions[n, 1], positions[n, 2], table)
         if k >= 0:
             px, py = positions[n, 0], positions[n, 1]
             if offsets[n] > 0.0:
                 x, y, z, w = orientations[n, 0], orientations[n, 1], orientations[n, 2], orientations[n, 3]
                 px += -offsets[n] * (2.0 * (x * z + w * y))
                 py += -offsets[n] * (2.0 * (y * z - w * x))
-            dvx, dvy = law_at(k, px, py, velocities[n, 0], velocities[n, 1], masses[n], dt, explicit, rates, per_mass,
-                              speeds, surface, limits, l_is_arc, l_origin, l_cos, l_sin, l_turn, l_radius)
+            dvx, dvy = law_at(k, px, py, velocities[n, 0], velocities[n, 1], masses[n], dt, explicit, table)
             velocities[n, 0] += dvx
             velocities[n, 1] += dvy
         positions[n, 0] += velocities[n, 0] * dt
