@@ -130,13 +130,7 @@ class Bottles:
         rows = b.live_rows           # parked, resting and free bodies are not even looked for
         field = b.under if b.under is not None else b.fields_under(fields, rows)
         if rows is None:
-            bodies = np.flatnonzero(field >= 0)
-            f = field[bodies]
-        else:
-            on = field >= 0
-            bodies, f = rows[on], field[on]
-        if len(bodies) == 0:
-            return
+            rows = np.arange(len(field))
         if self._grips is None:
             offsets = np.zeros(len(b.ids))
             for n, offset in self.base_offsets.items():
@@ -144,23 +138,36 @@ class Bottles:
             targets = np.array([self.base_bodies.get(n, i) for n, i in enumerate(b.ids)], dtype=int)
             self._grips = (offsets, targets, np.array(b.ids, dtype=int))
         offsets, targets, ids = self._grips
-        points, velocities = b.positions[bodies], b.velocities[bodies]
-        if self.base_offsets:
-            rows = np.flatnonzero(offsets[bodies] > 0.0)
-            if len(rows):
-                n = bodies[rows]
-                points[rows], velocities[rows] = base_points(
-                    b.positions[n], b.orientations[n], b.velocities[n], b.angular_velocities[n], offsets[n])
+        if not (self.base_offsets or self.base_bodies):
+            # Every bottle gripped at its centre (a plant's): which bodies are on a belt, and their
+            # forces and torques, in one compiled call.
+            bodies, points, fx, fy, torques = fields.drive_rows(rows, field, b.positions, b.velocities, b.masses,
+                                                                b.radii, b.angular_velocities)
+            if len(bodies) == 0:
+                return
+        else:
+            on = field >= 0
+            bodies, f = rows[on], field[on]
+            if len(bodies) == 0:
+                return
+            points, velocities = b.positions[bodies], b.velocities[bodies]
+            if self.base_offsets:
+                rows = np.flatnonzero(offsets[bodies] > 0.0)
+                if len(rows):
+                    n = bodies[rows]
+                    points[rows], velocities[rows] = base_points(
+                        b.positions[n], b.orientations[n], b.velocities[n], b.angular_velocities[n], offsets[n])
+            client = self.engine.client
+            if self.base_bodies:
+                for row, n in enumerate(bodies.tolist()):
+                    second = self.base_bodies.get(n)
+                    if second is not None:
+                        # The paper's model: the field sees the second body's own position and velocity.
+                        points[row] = pybullet.getBasePositionAndOrientation(second, client)[0]
+                        velocities[row] = pybullet.getBaseVelocity(second, client)[0]
+            fx, fy, torques = fields.drive(f, points, velocities, b.masses[bodies], b.radii[bodies],
+                                           b.angular_velocities[bodies, 2])
         client = self.engine.client
-        if self.base_bodies:
-            for row, n in enumerate(bodies.tolist()):
-                second = self.base_bodies.get(n)
-                if second is not None:
-                    # The paper's model: the field sees the second body's own position and velocity.
-                    points[row] = pybullet.getBasePositionAndOrientation(second, client)[0]
-                    velocities[row] = pybullet.getBaseVelocity(second, client)[0]
-        fx, fy, torques = fields.drive(f, points, velocities, b.masses[bodies], b.radii[bodies],
-                                       b.angular_velocities[bodies, 2])
         # A world-frame force acts at `at`: the centre of mass adds no torque, the base does.
         # Positional arguments: keywords cost pybullet's argument parser a tenth of the call.
         apply, frame = pybullet.applyExternalForce, pybullet.WORLD_FRAME

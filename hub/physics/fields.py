@@ -185,6 +185,14 @@ class ForceFields:
                       np.ascontiguousarray(velocities, float), np.ascontiguousarray(masses, float),
                       np.ascontiguousarray(radii, float), np.ascontiguousarray(spins, float), *self.laws())
 
+    def drive_rows(self, rows: np.ndarray, field: np.ndarray, positions: np.ndarray, velocities: np.ndarray,
+                   masses: np.ndarray, radii: np.ndarray, spins: np.ndarray) -> tuple:
+        """`drive` for bodies gripped at their centre of mass, picked in the same compiled call:
+        of `rows` (body rows, `field` the field under each, −1: none) those on a field, with
+        (bodies, points, fx, fy, torques) — `spins` the bodies' angular velocities (N,3)."""
+        return _drive_rows(np.asarray(rows, np.int64), np.asarray(field, np.int64), positions, velocities, masses,
+                           radii, spins, *self.laws())
+
     def laws(self) -> tuple:
         """The belts' laws as compiled loops take them (`law_at`): dt, the explicit law or not, the table."""
         return (self.dt, self.explicit, self.table())
@@ -246,12 +254,38 @@ def _drive(f, points, velocities, masses, radii, spins, dt, explicit, table):
     n = f.shape[0]
     fx, fy, torques = np.empty(n), np.empty(n), np.empty(n)
     for i in range(n):
-        x, y = law_at(f[i], points[i, 0], points[i, 1], velocities[i, 0], velocities[i, 1], masses[i], dt, explicit,
-                      table)
-        per_second = masses[i] / dt
-        fx[i], fy[i] = x * per_second, y * per_second
-        torques[i] = spin_torque_at(f[i], spins[i], masses[i], radii[i], dt, explicit, table)
+        fx[i], fy[i], torques[i] = _grip(f[i], points[i, 0], points[i, 1], velocities[i, 0], velocities[i, 1],
+                                         masses[i], radii[i], spins[i], dt, explicit, table)
     return fx, fy, torques
+
+
+@njit(cache=True)
+def _drive_rows(rows, field, positions, velocities, masses, radii, spins, dt, explicit, table):
+    """ForceFields.drive_rows, body by body."""
+    count = 0
+    for i in range(rows.shape[0]):
+        count += field[i] >= 0
+    bodies, points = np.empty(count, np.int64), np.empty((count, 3))
+    fx, fy, torques = np.empty(count), np.empty(count), np.empty(count)
+    j = 0
+    for i in range(rows.shape[0]):
+        if field[i] < 0:
+            continue
+        n = bodies[j] = rows[i]
+        points[j, 0], points[j, 1], points[j, 2] = positions[n, 0], positions[n, 1], positions[n, 2]
+        fx[j], fy[j], torques[j] = _grip(field[i], positions[n, 0], positions[n, 1], velocities[n, 0],
+                                         velocities[n, 1], masses[n], radii[n], spins[n, 2], dt, explicit, table)
+        j += 1
+    return bodies, points, fx, fy, torques
+
+
+@njit(cache=True)
+def _grip(k, px, py, vx, vy, mass, radius, spin, dt, explicit, table):
+    """Field `k`'s force (fx, fy) on one body gripped at (px, py) moving at (vx, vy), and its
+    torque against the spin about the vertical."""
+    x, y = law_at(k, px, py, vx, vy, mass, dt, explicit, table)
+    per_second = mass / dt
+    return x * per_second, y * per_second, spin_torque_at(k, spin, mass, radius, dt, explicit, table)
 
 
 @njit(cache=True)
