@@ -240,6 +240,8 @@ def test_inputs_set_again_unchanged_are_held_and_a_zero_changing_sign_is_written
     """The adapter does not write inputs the FMU already holds, bit for bit: the FMU steps on them
     as set; 0.0 and −0.0 compare equal but are not the same input, and the FMU sees the change."""
     slave = FmuSlave(inspect_fmu(foreign["typed3"]), "t", ["x32"], ["y32"], {})
+    written, write = [], slave._in.set   # what reaches the FMU's setters
+    slave._in.set = lambda values: (written.append(values[0]), write(values))
     try:
         t = 0.0
         for x in (2.0, 2.0, 0.0, -0.0, -0.0, 0.0, 4.0, 4.0):
@@ -248,5 +250,7 @@ def test_inputs_set_again_unchanged_are_held_and_a_zero_changing_sign_is_written
             t += 0.1
             y = slave.outputs()[0]
             assert (y, copysign(1.0, y)) == (1.5 * x, copysign(1.0, x)), f"x32 = {x!r} gave y32 = {y!r}"
+        assert [(v, copysign(1.0, v)) for v in written] == [(2.0, 1.0), (0.0, 1.0), (0.0, -1.0), (0.0, 1.0),
+                                                            (4.0, 1.0)]
     finally:
         slave.close()

@@ -10,7 +10,7 @@ from fmpy.fmi3 import FMU3Model
 
 from hub.core.errors import SimulationError
 from hub.core.logic_spec import CO_SIMULATION, MODEL_EXCHANGE
-from hub.logic.fmi import FmuInterface, FmuSlave
+from hub.logic.fmi import FmuInterface, FmuSlave, held
 
 
 @dataclass(frozen=True)
@@ -108,7 +108,7 @@ class FmuModel(FmuSlave):
 
     def set_inputs(self, values: list) -> None:
         values = list(values)
-        if values == self._inputs:
+        if held(values, self._inputs, self._reals):
             return
         self._call("enterEventMode", self._fmu.enterEventMode)
         self._call("set inputs", self._in.set, values)

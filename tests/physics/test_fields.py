@@ -2,8 +2,10 @@
 import math
 
 import numpy as np
+import pybullet
 import pytest
 
+from hub.physics import PhysicsWorld
 from hub.physics.fields import ForceFields
 from hub.physics.frames import Pose, Straight
 
@@ -136,3 +138,30 @@ def test_the_surface_grips_a_spinning_base():
     assert torques[3] == 0.0
     slow = fields.spin_torques(f[:1], np.array([SPIN_AT_REST / 2]), masses[:1], radii[:1])
     assert slow[0] == 0.0
+
+
+def test_a_region_added_after_a_lookup_is_found_and_a_tie_goes_to_the_first_declared():
+    """The compiled loops take the regions as one table, made again when a region is added; of
+    two regions with the same centre line the first declared drives the body."""
+    fields = ForceFields(1 / 150)
+    fields.add_region(Straight(Pose(0, 0, 0, 0), 1.0), 0.1, -1, 1, 16.0, 0.5)
+    points = np.array([[0.5, 0.0, 0.0], [2.5, 0.0, 0.0]])
+    assert fields.which(points).tolist() == [0, -1]
+    fields.add_region(Straight(Pose(2, 0, 0, 0), 1.0), 0.1, -1, 1, 16.0, 0.5)
+    fields.add_region(Straight(Pose(2, 0, 0, 0), 1.0), 0.1, -1, 1, 16.0, -0.5)
+    assert fields.which(points).tolist() == [0, 1]
+    _, forces = fields.forces(points[1:], np.zeros((1, 3)), np.array([0.05]))
+    assert forces[0, 0] > 0.0          # region 1's speed (+0.5), not region 2's
+
+
+def test_a_spinning_bottle_in_the_engine_is_gripped_by_the_belts_surface():
+    # Through the world's drive (bottles gripped at their centre): the spin decays at the belt's
+    # rate; a frictionless bottle would keep it.
+    with PhysicsWorld(150) as world:
+        world.add_support(0.0, (0.0, -0.07, 3.0, 0.07))
+        world.add_belt_field(Straight(Pose(0.0, 0.0, 0.0, 0.0), 3.0), 0.05, -0.02, 0.1, 16.0, 0.5)
+        row = world.add_bottle((0.3, 0, 0), 0.03, 0.1, 0.05, "b")
+        world.start()
+        world.engine.call(pybullet.resetBaseVelocity, world.bodies.ids[row], [0.0, 0.0, 0.0], [0.0, 0.0, 5.0])
+        world.step(30)
+        assert abs(world.angular_velocities[row, 2]) < 5.0 * math.exp(-16.0 * 30 / 150) * 1.5

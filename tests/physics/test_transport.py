@@ -4,6 +4,7 @@ Every run here asks the engine at every tick whether a free bottle touches anyth
 (check_free), as check_rest does for resting ones."""
 
 import numpy as np
+import pybullet
 import pytest
 
 from hub.core.errors import ScenarioError
@@ -359,3 +360,40 @@ def test_a_bottle_put_onto_a_belt_above_lists_the_boxes_up_there():
         world.unpark(row, (0.20, 0.0, 0.3))
         world.step(60)
         assert world.positions[row, 0] + 0.03 <= 0.28 + 1e-3
+
+
+def spun_or_thrown(world: PhysicsWorld, row: int, velocity=(0.0, 0.0, 0.0), spin=(0.0, 0.0, 0.0)) -> None:
+    """Give a bottle in the engine a velocity and a spin (read back at the next tick)."""
+    world.start()
+    world.engine.call(pybullet.resetBaseVelocity, world.bodies.ids[row], list(velocity), list(spin))
+
+
+@pytest.mark.parametrize("lead", [0.2, 0.25, 0.3])
+def test_a_free_bottle_comes_back_before_a_bottle_thrown_in_the_engine_reaches_it(lead):
+    # Between two whole looks a free bottle is looked at against the bodies awake in the engine
+    # only: one thrown after it along a weak belt (k = 2/s keeps it fast) must bring it back.
+    with PhysicsWorld(150) as world:
+        world.check_free = world.check_rest = True     # the engine's word at every tick
+        world.add_support(0.0, (0.0, -0.07, 3.0, 0.07))
+        world.add_belt_field(Straight(Pose(0.0, 0.0, 0.0, 0.0), 3.0), 0.05, -0.02, 0.1, 2.0, 0.5)
+        ahead = world.add_bottle((lead, 0, 0), 0.03, 0.1, 0.05, "ahead", transport="exact")
+        thrown = world.add_bottle((0.05, 0, 0), 0.03, 0.1, 0.05, "thrown", transport="engine")
+        world.step(90)
+        assert world.transport.free[ahead] and not world.transport.free[thrown]
+        spun_or_thrown(world, thrown, velocity=(3.0, 0.0, 0.0))
+        world.step(90)
+        assert world.transport.left >= 1                # it came back (check_free: before it was hit)
+
+
+@pytest.mark.parametrize("spin, goes_free", [(0.0, True), (4.0, False)])
+def test_a_bottle_spinning_on_a_belt_stays_in_the_engine(spin, goes_free):
+    # The paper's `along` grip leaves a frictionless bottle's spin alone: one spinning faster than
+    # a riding bottle does (SPIN) never leaves the engine; the same bottle not spinning does.
+    with PhysicsWorld(150) as world:
+        world.add_support(0.0, (0.0, -0.07, 3.0, 0.07))
+        world.add_belt_field(Straight(Pose(0.0, 0.0, 0.0, 0.0), 3.0), 0.05, -0.02, 0.1, 16.0, 0.5, grip="along")
+        row = world.add_bottle((0.3, 0, 0), 0.03, 0.1, 0.05, "b", transport="exact")
+        spun_or_thrown(world, row, spin=(0.0, 0.0, spin))
+        world.step(120)
+        assert bool(world.transport.entered) == goes_free
+        assert goes_free or abs(world.angular_velocities[row, 2]) > 3.0
