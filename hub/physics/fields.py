@@ -79,7 +79,9 @@ class ForceFields:
         self.limits = np.zeros(0)      # most acceleration friction can give, m/s² (inf: none)
         self.surfaces = np.zeros(0)    # height of the belt's surface, m (its centre line's)
         self.straight_law = np.zeros(0, bool)
-        self._table = None   # the regions as one array for compiled loops, until a region is added
+        # The regions as one array for compiled loops, made again when a region is added; the
+        # arrays above are copied into it, so they change only through add_region and set_speed.
+        self._table = None
 
     def __len__(self) -> int:
         return len(self.lines)

@@ -106,8 +106,8 @@ class FreeTransport:
         self.near = np.zeros((0, NEAR), np.int64)   # per body: the fixed boxes within LIST of it then
         self.near_count = np.zeros(0, np.int64)     # and how many (more than NEAR: too many to list)
         self.rows = np.zeros(0, int)        # the free rows, in body order
-        self.pulls = np.zeros((0, 2))       # per body: its belt's velocity change now (x, y), m/s (_pull_now)
-        self.most = np.zeros(0)            # per body: the most its belts may pull it over a look, m/s (_pull_now)
+        self.pulls = np.zeros((0, 2))       # per body: its belt's velocity change now (x, y), m/s (_pulls)
+        self.most = np.zeros(0)            # per body: the most its belts may pull it over a look, m/s (_pulls)
         self.due = 0                        # the tick at which the free bottles are looked at next
         self.clear = np.zeros(0, int)       # per body: the tick up to which its last whole look holds
         self._everything = False            # every free bottle is looked at whole next time (a belt's speed changed)
@@ -159,74 +159,6 @@ class FreeTransport:
             self.offsets[row] = offset
 
     # --- the tests ------------------------------------------------------------------------
-    def _fixed_hit(self, rows, times: int, positions, velocities) -> np.ndarray:
-        """(len(rows),): whether each of `rows`, headed on for `times` × its look-ahead (n ticks),
-        could reach a fixed box.
-
-        Its way: n ticks at its velocity v, plus what the belt's pull adds — a pull that does
-        not grow (the relaxing law, or friction's constant cap; a belt's speed change looks
-        again at once, with the pull at the new speed) moves it at most n(n+1)/2·|Δv|·dt
-        further, along the last change Δv. So at every one of the n ticks it is at
-        p + a·v·T + b·S·Δv for some a, b in [0, 1] (T = n·dt, S = n(n+1)/2·dt). The part of
-        S·Δv along v keeps it on v's line: within the three segments from p along v·T, from p
-        along that part, and from p + v·T along it; the part across v widens its radius, with
-        FIXED_MARGIN. A bottle setting off from rest on a belt between rails is pulled along
-        them, not into them. Each segment's distance from each box it may reach (listed
-        within LIST) against the radius so widened: its ends and the box's corners give the
-        distance whenever the segment is shorter than the bottle is wide. Each bottle's boxes are
-        listed afresh once it has moved LIST/2 from where they were last, across or up (the only
-        boxes it can reach before then are within LIST of it there, both ways); one with more
-        than NEAR of them counts as reaching one.
-
-        A bottle that rides a straight belt along a box's face instead — beside that face all the
-        way, no further into it than the engine's contact leaves one (SLIDE_INTO), and coming no
-        nearer it than SLIDE — slides along it as a bottle in the engine slides along a
-        frictionless rail, untouched: however near it is, even touching (a queue's bottles ride
-        on pressed against a guard rail, at one velocity along it), that box cannot stop it
-        (`_slides`)."""
-        b = self.bodies
-        if len(rows) == 0 or self._fixed is None:
-            return np.zeros(len(rows), bool)
-        return _fixed_hit(np.asarray(rows, np.int64), float(times), self.dt, positions, velocities, self.pulls,
-                          self.ahead, b.radii, b.half_heights, self.listed_at, self.near, self.near_count,
-                          self.fields.straight_law, self.fields.regions(), *self._fixed)
-
-    def _touching(self, rows, times: int, positions, orientations, velocities, spins, among=None,
-                  joined=None) -> np.ndarray:
-        """(len(rows),): whether each of `rows` could touch another body in play (or of `among`)
-        or a moving part within `times` × its look-ahead. Their bounds first (rest.bound; pairs
-        found by a sweep along the plant's longer axis when there are many), then for each pair
-        whose bounds meet: two steady bottles (free, or upright and steady in the engine) by their
-        footprints and their relative motion — the difference of their velocities, of the belt's
-        pull and their rocking brings them together, nothing else; any other pair by the wake
-        rule's boxes, each body headed as far.
-
-        Two steady bottles on one straight belt whose law scales with the mass, both staying
-        on it as far as the look goes (`belt`), follow the same law, which never lets two
-        velocities part — on u = v_belt − v it is u ↦ k·u, or with friction's cap
-        u ↦ u − (1 − k)·P(u), P the projection onto a ball: both non-expansive — so their gap
-        changes by at most n·|v_a − v_b|·dt, however hard the belt pulls: a line of bottles
-        setting off from rest together stays a line. Two such bottles both `joined` (by default:
-        free) at the same velocity, bit for bit, and not turning are a train: the law gives both
-        the same velocity change at every tick and the engine's position step moves both alike,
-        so their gap stays what it is, to rounding, even when they touch (a magazine's queue
-        stood at rest in pairs, and rides off together). Free bottles nearer each other than
-        2·SHAPE_MARGIN are a train's, and when one of them comes back into the engine the other
-        comes too (`_trains`). One compiled loop (`_touching` below)."""
-        b, fields = self.bodies, self.fields
-        play = b.in_play_rows()
-        if among is None:
-            against = np.ones(len(self.free), bool)
-        else:   # free bottles follow laws the whole looks bound: only the pairs with `among`
-            against = np.zeros(len(self.free), bool)
-            against[among] = True
-        centres, extents, growth = self._part_boxes()
-        return _touching(rows, play, float(times), self.dt, positions, orientations, velocities, spins, b.radii,
-                         b.half_heights, self.ahead, self.most, self.pulls, self.free,
-                         self.free if joined is None else joined, against, fields.straight_law, fields.regions(),
-                         centres, _grown(extents, growth, self.ahead, np.asarray(rows, np.int64), float(times),
-                                         self.dt))
-
     def _trains(self, seeds: np.ndarray, pool: np.ndarray) -> np.ndarray:
         """`seeds` (a mask over bodies) grown by the bodies of `pool` (rows) whose footprints
         come within 2·SHAPE_MARGIN of one it holds, until it holds the whole train of each."""
@@ -234,17 +166,6 @@ class FreeTransport:
         out = seeds.copy()
         _grow(out, np.asarray(pool, np.int64), b.positions, b.radii, b.half_heights)
         return out
-
-    def _pull_now(self, rows, positions, velocities) -> None:
-        """The pull each moving body of `rows` gets from the belt under it at its velocity now —
-        what the next tick applies — in place of the last tick's, which is stale once a bottle
-        crossed onto another belt; and `most`, the most it may be pulled over a look (one, two
-        or LONG look-aheads forward): the larger of now and the law where its way ends, which may
-        be another belt's. Bodies not in `rows` (resting, parked) are not pulled."""
-        self.most[:] = 0.0
-        if len(rows):
-            _pulls(np.asarray(rows, np.int64), positions, velocities, self.bodies.masses, self.ahead, self.dt,
-                   self.pulls, self.most, self.fields.regions(), self.fields.laws())
 
     def _part_boxes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The moving parts' boxes (centres, half extents) as the wake rule widens them for one
@@ -261,16 +182,6 @@ class FreeTransport:
         self._parts_at_rest = None if moving.moving else boxes
         return boxes
 
-    def _on_belt(self, rows, now, times: int, positions, velocities) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(ok, still, stays), each (len(rows),): riding a belt now (`now`: the field under each)
-        and, `times` × its look-ahead on, one at the same height, not coming to a stop on a still
-        belt (ok); on a belt, coming to a stop on a still one (still); on the same belt all the
-        way, at its velocity and with the belt's pull (stays: its law, and so its pull, does not
-        change on the way — one crossing onto a slower belt is pulled harder there)."""
-        fields = self.fields
-        return _on_belt(np.asarray(rows, np.int64), np.asarray(now, np.int64), float(times), self.dt, positions,
-                        velocities, self.pulls, self.ahead, fields.surfaces, fields.speeds, fields.regions())
-
     # --- before a tick: who must come back ------------------------------------------------
     def release_near(self, tick: int, placed: dict, moving: bool, awake: np.ndarray) -> None:
         """Before a tick: free bottles that could be touched within their look-ahead re-enter the
@@ -282,7 +193,7 @@ class FreeTransport:
         where that is too far or its way crosses onto another belt. Everything it was looked at
         against moves by a law that look bounds — fixed geometry and resting bodies stand, free
         bottles follow their belts, each body's pull is taken afresh from its belt's law
-        (`_pull_now`) and bounded by the law where its way ends — except the bodies awake in the
+        (`_pulls`) and bounded by the law where its way ends — except the bodies awake in the
         engine, which contacts may throw: against those (`awake`) every free bottle is looked at
         each time. Every free bottle is looked at whole at once after a body was put down
         (`placed`), while a moving part is under way (`moving`) and after a belt changed its speed."""
@@ -433,7 +344,7 @@ class FreeTransport:
         """(go, near): of `rows`, those upright and steady, standing on a belt (base within SINK
         of its surface) and passing the tests `2·ahead` ticks forward; and those that ride a belt
         but are near something (`joined`: who may form a train). Every pull is taken afresh
-        first, for `pulled` (`_pull_now`). One compiled call (`_leave`)."""
+        first, for `pulled` (`_pulls`). One compiled call (`_leave`)."""
         b, fields, fixed = self.bodies, self.fields, self._fixed
         centres, extents, growth = self._part_boxes()
         go, near = _leave(np.asarray(rows, np.int64), np.asarray(pulled, np.int64), b.in_play_rows(), self.dt,
@@ -528,9 +439,32 @@ class FreeTransport:
 @njit(cache=True)
 def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at, near, near_count,
                straight_law, regions, c, h, cos, sin):
-    """FreeTransport._fixed_hit, row by row and, for each, box by box of its list (listed again
-    first where it is stale). A bottle slides along a face only on a straight belt it stays on
-    (`_belt`): there the belt's pull keeps its direction, and its way is the parallelogram."""
+    """(len(rows),): whether each of `rows`, headed on for `times` × its look-ahead (n ticks),
+    could reach a fixed box (c, h, cos, sin: their centres, half extents and yaws).
+
+    Its way: n ticks at its velocity v, plus what the belt's pull adds — a pull that does
+    not grow (the relaxing law, or friction's constant cap; a belt's speed change looks
+    again at once, with the pull at the new speed) moves it at most n(n+1)/2·|Δv|·dt
+    further, along the last change Δv. So at every one of the n ticks it is at
+    p + a·v·T + b·S·Δv for some a, b in [0, 1] (T = n·dt, S = n(n+1)/2·dt). The part of
+    S·Δv along v keeps it on v's line: within the three segments from p along v·T, from p
+    along that part, and from p + v·T along it; the part across v widens its radius, with
+    FIXED_MARGIN. A bottle setting off from rest on a belt between rails is pulled along
+    them, not into them. Each segment's distance from each box it may reach (listed
+    within LIST) against the radius so widened: its ends and the box's corners give the
+    distance whenever the segment is shorter than the bottle is wide. Each bottle's boxes are
+    listed afresh once it has moved LIST/2 from where they were last, across or up (the only
+    boxes it can reach before then are within LIST of it there, both ways); one with more
+    than NEAR of them counts as reaching one.
+
+    A bottle that rides a straight belt along a box's face instead — beside that face all the
+    way, no further into it than the engine's contact leaves one (SLIDE_INTO), and coming no
+    nearer it than SLIDE — slides along it as a bottle in the engine slides along a
+    frictionless rail, untouched: however near it is, even touching (a queue's bottles ride
+    on pressed against a guard rail, at one velocity along it), that box cannot stop it
+    (`_slides`).
+
+    Row by row and, for each, box by box of its list (listed again first where it is stale)."""
     hit = np.zeros(rows.shape[0], np.bool_)
     for i in range(rows.shape[0]):
         n_ = rows[i]
@@ -578,7 +512,11 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
 
 @njit(cache=True)
 def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, surfaces, speeds, regions):
-    """FreeTransport._on_belt, row by row: (ok, still, stays)."""
+    """(ok, still, stays), each (len(rows),): riding a belt now (`now`: the field under each)
+    and, `times` × its look-ahead on, one at the same height, not coming to a stop on a still
+    belt (ok); on a belt, coming to a stop on a still one (still); on the same belt all the
+    way, at its velocity and with the belt's pull (stays: its law, and so its pull, does not
+    change on the way — one crossing onto a slower belt is pulled harder there)."""
     count = rows.shape[0]
     ok, still, stays = np.zeros(count, np.bool_), np.zeros(count, np.bool_), np.zeros(count, np.bool_)
     for i in range(count):
@@ -602,8 +540,12 @@ def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, surfaces
 
 @njit(cache=True)
 def _pulls(rows, positions, velocities, masses, ahead, dt, pulls, most, regions, laws):
-    """FreeTransport._pull_now, body by body: the law under each now (pulls), and the
-    largest of it and the law where its way ends one, two and LONG look-aheads on (most)."""
+    """The pull each moving body of `rows` gets from the belt under it at its velocity now
+    (`pulls`: what the next tick applies), in place of the last tick's, which is stale once a
+    bottle crossed onto another belt; and `most`, the most it may be pulled over a look (one,
+    two or LONG look-aheads forward): the larger of now and the law where its way ends, which
+    may be another belt's. Bodies not in `rows` (resting, parked) are not pulled: the caller
+    (`_look`, `_leave`) zeroes `most` first."""
     table = regions[0]
     for n in rows:
         x, y, z = positions[n, 0], positions[n, 1], positions[n, 2]
@@ -705,12 +647,33 @@ def _box_distance(x, y, hx, hy):
 @njit(cache=True)
 def _touching(rows, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most,
               pulls, free, joined, against, straight_law, regions, part_centres, part_extents):
-    """FreeTransport._touching: whether each of `rows` could touch a body of `play` (sorted, holds
-    `rows`) that is one of `against` (a mask over bodies) or a moving part's box (part_centres,
-    part_extents); `joined`: the bodies that may form a train; `straight_law` per field:
-    straight, its law scaled by the mass; `regions`: ForceFields.regions. Pairs by their bounds
-    (rest.bound), found along the plant's longer axis from each row outwards, then as
-    FreeTransport._touching says."""
+    """(len(rows),): whether each of `rows` could touch another body in play (or of `among`)
+    or a moving part within `times` × its look-ahead. Their bounds first (rest.bound; pairs
+    found by a sweep along the plant's longer axis when there are many), then for each pair
+    whose bounds meet: two steady bottles (free, or upright and steady in the engine) by their
+    footprints and their relative motion — the difference of their velocities, of the belt's
+    pull and their rocking brings them together, nothing else; any other pair by the wake
+    rule's boxes, each body headed as far.
+
+    Two steady bottles on one straight belt whose law scales with the mass, both staying
+    on it as far as the look goes (`belt`), follow the same law, which never lets two
+    velocities part — on u = v_belt − v it is u ↦ k·u, or with friction's cap
+    u ↦ u − (1 − k)·P(u), P the projection onto a ball: both non-expansive — so their gap
+    changes by at most n·|v_a − v_b|·dt, however hard the belt pulls: a line of bottles
+    setting off from rest together stays a line. Two such bottles both `joined` (by default:
+    free) at the same velocity, bit for bit, and not turning are a train: the law gives both
+    the same velocity change at every tick and the engine's position step moves both alike,
+    so their gap stays what it is, to rounding, even when they touch (a magazine's queue
+    stood at rest in pairs, and rides off together). Free bottles nearer each other than
+    2·SHAPE_MARGIN are a train's, and when one of them comes back into the engine the other
+    comes too (`FreeTransport._trains`).
+
+    `play`: the bodies in play (sorted, holds `rows`); `against`: a mask of the bodies they are
+    looked at against; `joined`: the bodies that may form a train; `straight_law`: per field,
+    straight with its law scaled by the mass; `regions`: ForceFields.regions; the moving parts'
+    boxes (part_centres, part_extents). Pairs by their bounds (rest.bound), found along the
+    plant's longer axis from each row outwards. Only `rows` and the bodies of `against` are
+    bounded and sorted."""
     farthest = 0.0
     for q in range(play.shape[0]):
         farthest = max(farthest, ahead[play[q]] * times)
@@ -787,7 +750,7 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
 @njit(cache=True)
 def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most, pulls,
           belt, farthest, straight_law, regions, reaches, steady, joined):
-    """Whether bodies play[a] and play[o] could touch within the look (FreeTransport._touching);
+    """Whether bodies play[a] and play[o] could touch within the look (`_touching`);
     not when they are a train: both joined, on one straight belt whose law scales with the mass
     and staying on it, at the same velocity and not turning — the law moves them alike."""
     na, no = play[a], play[o]       # their bounds meet (the caller tested them)
@@ -808,7 +771,7 @@ def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, rad
                 belt[q] = _belt(play[q], farthest, dt, positions, velocities, pulls, straight_law, regions)
         one_belt = belt[a] >= 0 and belt[a] == belt[o]
         if not one_belt:
-            way += (most[na] + most[no]) * n * (n + 1.0) / 2.0 * dt   # the most each may be pulled (_pull_now)
+            way += (most[na] + most[no]) * n * (n + 1.0) / 2.0 * dt   # the most each may be pulled (_pulls)
         if math.hypot(ax, ay) - radii[na] - radii[no] - 2.0 * SHAPE_MARGIN >= way:
             return False
         return not (one_belt and way == 0.0 and joined[na] and joined[no])
@@ -951,7 +914,8 @@ def _leave(rows, pulled, play, dt, positions, orientations, velocities, spins, m
            most, pulls, free, joined, straight_law, surfaces, speeds, regions, laws, part_centres, part_extents,
            part_growth, has_fixed, listed_at, near_list, near_count, c, h, cos, sin):
     """FreeTransport._leaving in one call: every pull afresh (`_pulls`, for `pulled`), then of
-    `rows` those steady (FreeTransport.steady) with their base on a belt's surface, on it 2 ×
+    `rows` those steady (upright, tilt under TILT, spin under SPIN, vertical speed under RISE, or
+    free) with their base on a belt's surface, on it 2 ×
     their look-ahead forward (`_on_belt`), and touching nothing then (`_touching`, `_fixed_hit`):
     masks over `rows` of those that go and those near something."""
     most[:] = 0.0
