@@ -15,7 +15,7 @@ class Watch:
     resting ones are not read, so not tested) against a speed bound and the world's box.
 
     Without it a bottle the engine flings at 50 m/s leaves the rails and falls for ever, and the
-    recording says nothing. The test is numpy on the arrays already read: a comparison catches
+    recording says nothing. The test runs on the arrays already read: a comparison catches
     NaN too (NaN ≤ bound is False), so one pass covers non-finite, too fast and out of the box.
 
     The box is the static geometry's bounding box and the bodies' places at the start, widened by
