@@ -138,6 +138,7 @@ class Bottles:
             targets = np.array([self.base_bodies.get(n, i) for n, i in enumerate(b.ids)], dtype=int)
             self._grips = (offsets, targets, np.array(b.ids, dtype=int))
         offsets, targets, ids = self._grips
+        client = self.engine.client
         if not (self.base_offsets or self.base_bodies):
             # Every bottle gripped at its centre (a plant's): which bodies are on a belt, and their
             # forces and torques, in one compiled call.
@@ -157,7 +158,6 @@ class Bottles:
                     n = bodies[rows]
                     points[rows], velocities[rows] = base_points(
                         b.positions[n], b.orientations[n], b.velocities[n], b.angular_velocities[n], offsets[n])
-            client = self.engine.client
             if self.base_bodies:
                 for row, n in enumerate(bodies.tolist()):
                     second = self.base_bodies.get(n)
@@ -167,7 +167,6 @@ class Bottles:
                         velocities[row] = pybullet.getBaseVelocity(second, client)[0]
             fx, fy, torques = fields.drive(f, points, velocities, b.masses[bodies], b.radii[bodies],
                                            b.angular_velocities[bodies, 2])
-        client = self.engine.client
         # A world-frame force acts at `at`: the centre of mass adds no torque, the base does.
         # Positional arguments: keywords cost pybullet's argument parser a tenth of the call.
         apply, frame = pybullet.applyExternalForce, pybullet.WORLD_FRAME

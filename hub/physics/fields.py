@@ -134,11 +134,7 @@ class ForceFields:
         for every body that moves: one compiled loop, a fifth of the same test on numpy arrays)."""
         if len(self) == 0 or len(points) == 0:
             return np.full(len(points), -1)
-        return _nearest(np.ascontiguousarray(points, float), *self.regions())
-
-    def regions(self) -> tuple:
-        """The regions as compiled loops take them (`field_at`): the table."""
-        return (self.table(),)
+        return _nearest(np.ascontiguousarray(points, float), self.table())
 
     def table(self) -> np.ndarray:
         """(regions, 17): every region's centre line, half width, heights and law, in the columns

@@ -217,7 +217,7 @@ class FreeTransport:
             tick, whole, rows, b.in_play_rows() if b.moved_rows is None else b.moved_rows,
             np.asarray(awake, np.int64), b.in_play_rows(), self.dt, positions, b.orientations, b.velocities,
             b.angular_velocities, b.masses, b.radii, b.half_heights, self.ahead, self.most, self.pulls, self.clear,
-            self.free, fields.straight_law, fields.surfaces, fields.speeds, fields.regions(), fields.laws(),
+            self.free, fields.straight_law, fields.surfaces, fields.speeds, fields.table(), fields.explicit,
             centres, extents, growth, fixed is not None, self.listed_at, self.near, self.near_count,
             *(fixed if fixed is not None else _NO_BOXES))
         settle = None
@@ -350,7 +350,7 @@ class FreeTransport:
         go, near = _leave(np.asarray(rows, np.int64), np.asarray(pulled, np.int64), b.in_play_rows(), self.dt,
                           b.positions, b.orientations, b.velocities, b.angular_velocities, b.masses, b.radii,
                           b.half_heights, self.ahead, self.most, self.pulls, self.free, joined, fields.straight_law,
-                          fields.surfaces, fields.speeds, fields.regions(), fields.laws(), centres, extents, growth,
+                          fields.surfaces, fields.speeds, fields.table(), fields.explicit, centres, extents, growth,
                           fixed is not None, self.listed_at, self.near, self.near_count,
                           *(fixed if fixed is not None else _NO_BOXES))
         return rows[go], rows[near]
@@ -438,7 +438,7 @@ class FreeTransport:
 
 @njit(cache=True)
 def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at, near, near_count,
-               straight_law, regions, c, h, cos, sin):
+               straight_law, table, c, h, cos, sin):
     """(len(rows),): whether each of `rows`, headed on for `times` × its look-ahead (n ticks),
     could reach a fixed box (c, h, cos, sin: their centres, half extents and yaws).
 
@@ -490,7 +490,7 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
         gx, gy = ux * along, uy * along
         widen = across + FIXED_MARGIN
         px, py = positions[n_, 0], positions[n_, 1]
-        straight = _belt(n_, n, dt, positions, velocities, pulls, straight_law, regions) >= 0
+        straight = _belt(n_, n, dt, positions, velocities, pulls, straight_law, table) >= 0
         for j in range(near_count[n_]):
             k = near[n_, j]
             if abs(positions[n_, 2] - c[k, 2]) > h[k, 2] + half_heights[n_] + FIXED_MARGIN:
@@ -511,7 +511,7 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
 
 
 @njit(cache=True)
-def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, surfaces, speeds, regions):
+def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, surfaces, speeds, table):
     """(ok, still, stays), each (len(rows),): riding a belt now (`now`: the field under each)
     and, `times` × its look-ahead on, one at the same height, not coming to a stop on a still
     belt (ok); on a belt, coming to a stop on a still one (still); on the same belt all the
@@ -527,11 +527,11 @@ def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, surfaces
         x = positions[n, 0] + velocities[n, 0] * (m * dt)
         y = positions[n, 1] + velocities[n, 1] * (m * dt)
         z = positions[n, 2] + velocities[n, 2] * (m * dt)
-        there = field_at(x, y, z, *regions)
+        there = field_at(x, y, z, table)
         if there < 0 or surfaces[k] != surfaces[there]:
             continue
         grow = m * (m + 1.0) / 2.0 * dt
-        stays[i] = there == k and field_at(x + pulls[n, 0] * grow, y + pulls[n, 1] * grow, z, *regions) == k
+        stays[i] = there == k and field_at(x + pulls[n, 0] * grow, y + pulls[n, 1] * grow, z, table) == k
         vx, vy = velocities[n, 0], velocities[n, 1]
         still[i] = speeds[k] == 0.0 and vx * vx + vy * vy < STILL * STILL
         ok[i] = not still[i]
@@ -539,26 +539,25 @@ def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, surfaces
 
 
 @njit(cache=True)
-def _pulls(rows, positions, velocities, masses, ahead, dt, pulls, most, regions, laws):
+def _pulls(rows, positions, velocities, masses, ahead, dt, explicit, pulls, most, table):
     """The pull each moving body of `rows` gets from the belt under it at its velocity now
     (`pulls`: what the next tick applies), in place of the last tick's, which is stale once a
     bottle crossed onto another belt; and `most`, the most it may be pulled over a look (one,
     two or LONG look-aheads forward): the larger of now and the law where its way ends, which
     may be another belt's. Bodies not in `rows` (resting, parked) are not pulled: the caller
     (`_look`, `_leave`) zeroes `most` first."""
-    table = regions[0]
     for n in rows:
         x, y, z = positions[n, 0], positions[n, 1], positions[n, 2]
         vx, vy = velocities[n, 0], velocities[n, 1]
         largest, here = 0.0, -1
         for times in (0.0, 1.0, 2.0, float(LONG)):
             h = ahead[n] * times * dt
-            k = field_at(x + vx * h, y + vy * h, z + velocities[n, 2] * h, *regions)
+            k = field_at(x + vx * h, y + vy * h, z + velocities[n, 2] * h, table)
             if times > 0.0 and k == here and (k < 0 or not table[k, ARC]):
                 continue        # the same straight belt: the same law at the same velocity
             dvx = dvy = 0.0
             if k >= 0:
-                dvx, dvy = law_at(k, x + vx * h, y + vy * h, vx, vy, masses[n], *laws)
+                dvx, dvy = law_at(k, x + vx * h, y + vy * h, vx, vy, masses[n], dt, explicit, table)
             size = math.hypot(dvx, dvy)
             if times == 0.0:
                 pulls[n, 0], pulls[n, 1], here = dvx, dvy, k
@@ -646,7 +645,7 @@ def _box_distance(x, y, hx, hy):
 
 @njit(cache=True)
 def _touching(rows, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most,
-              pulls, free, joined, against, straight_law, regions, part_centres, part_extents):
+              pulls, free, joined, against, straight_law, table, part_centres, part_extents):
     """(len(rows),): whether each of `rows` could touch another body in play (or of `among`)
     or a moving part within `times` × its look-ahead. Their bounds first (rest.bound; pairs
     found by a sweep along the plant's longer axis when there are many), then for each pair
@@ -670,7 +669,7 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
 
     `play`: the bodies in play (sorted, holds `rows`); `against`: a mask of the bodies they are
     looked at against; `joined`: the bodies that may form a train; `straight_law`: per field,
-    straight with its law scaled by the mass; `regions`: ForceFields.regions; the moving parts'
+    straight with its law scaled by the mass; `table`: ForceFields.table; the moving parts'
     boxes (part_centres, part_extents). Pairs by their bounds (rest.bound), found along the
     plant's longer axis from each row outwards. Only `rows` and the bodies of `against` are
     bounded and sorted."""
@@ -742,14 +741,14 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
                         or abs(positions[na, 2] - positions[no, 2]) >= reach):
                     continue      # their bounds do not meet
                 if _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights,
-                         ahead, most, pulls, belt, farthest, straight_law, regions, reaches, steady, joined):
+                         ahead, most, pulls, belt, farthest, straight_law, table, reaches, steady, joined):
                     touching[i] = True
     return touching
 
 
 @njit(cache=True)
 def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most, pulls,
-          belt, farthest, straight_law, regions, reaches, steady, joined):
+          belt, farthest, straight_law, table, reaches, steady, joined):
     """Whether bodies play[a] and play[o] could touch within the look (`_touching`);
     not when they are a train: both joined, on one straight belt whose law scales with the mass
     and staying on it, at the same velocity and not turning — the law moves them alike."""
@@ -768,7 +767,7 @@ def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, rad
         way = (closing + rock) * n * dt
         for q in (a, o):
             if belt[q] == -2:
-                belt[q] = _belt(play[q], farthest, dt, positions, velocities, pulls, straight_law, regions)
+                belt[q] = _belt(play[q], farthest, dt, positions, velocities, pulls, straight_law, table)
         one_belt = belt[a] >= 0 and belt[a] == belt[o]
         if not one_belt:
             way += (most[na] + most[no]) * n * (n + 1.0) / 2.0 * dt   # the most each may be pulled (_pulls)
@@ -789,11 +788,11 @@ def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, rad
 
 
 @njit(cache=True)
-def _belt(n, m, dt, positions, velocities, pulls, straight_law, regions):
+def _belt(n, m, dt, positions, velocities, pulls, straight_law, table):
     """The straight belt with a mass-scaled law body `n` stands on and stays on for `m` ticks at
     its velocity and pull, or −1."""
     x, y, z = positions[n, 0], positions[n, 1], positions[n, 2]
-    now = field_at(x, y, z, *regions)
+    now = field_at(x, y, z, table)
     if now < 0 or not straight_law[now]:
         return -1
     # Its way lies in the parallelogram of its velocity's way and the pull's: all four corners on
@@ -802,7 +801,7 @@ def _belt(n, m, dt, positions, velocities, pulls, straight_law, regions):
     wx, wy = velocities[n, 0] * m * dt, velocities[n, 1] * m * dt
     gx, gy = pulls[n, 0] * grow, pulls[n, 1] * grow
     for cx, cy in ((wx, wy), (gx, gy), (wx + gx, wy + gy)):
-        if field_at(x + cx, y + cy, z, *regions) != now:
+        if field_at(x + cx, y + cy, z, table) != now:
             return -1
     return now
 
@@ -833,7 +832,7 @@ def _grown(extents, growth, ahead, rows, times, dt):
 
 @njit(cache=True)
 def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, velocities, spins, masses, radii,
-          half_heights, ahead, most, pulls, clear, free, straight_law, surfaces, speeds, regions, laws, part_centres,
+          half_heights, ahead, most, pulls, clear, free, straight_law, surfaces, speeds, table, explicit, part_centres,
           part_extents, part_growth, has_fixed, listed_at, near_list, near_count, c, h, cos, sin):
     """FreeTransport.release_near's look at the free `rows`, in one call: every pull taken afresh
     (`_pulls`, for `pulled`); the rows not due for a whole look against the bodies `awake` in
@@ -844,7 +843,7 @@ def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, v
     (ok), coming to a stop on a still belt (still), near something (near), and its field now."""
     most[:] = 0.0
     if pulled.shape[0]:
-        _pulls(pulled, positions, velocities, masses, ahead, dt, pulls, most, regions, laws)
+        _pulls(pulled, positions, velocities, masses, ahead, dt, explicit, pulls, most, table)
     count = rows.shape[0]
     due = np.empty(count, np.bool_)
     for i in range(count):
@@ -855,7 +854,7 @@ def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, v
         against = np.zeros(free.shape[0], np.bool_)
         against[awake] = True
         found = _touching(others, play, 1.0, dt, positions, orientations, velocities, spins, radii, half_heights,
-                          ahead, most, pulls, free, free, against, straight_law, regions, part_centres,
+                          ahead, most, pulls, free, free, against, straight_law, table, part_centres,
                           _grown(part_extents, part_growth, ahead, others, 1.0, dt))
         k = 0
         for i in range(count):
@@ -870,13 +869,13 @@ def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, v
         return due, back, ok, still, near, now
     for i in range(m):
         n = look[i]
-        now[i] = field_at(positions[n, 0], positions[n, 1], positions[n, 2], *regions)
+        now[i] = field_at(positions[n, 0], positions[n, 1], positions[n, 2], table)
     everyone = np.ones(free.shape[0], np.bool_)
     # LONG look-aheads forward first, then what that finds near, or off its belt, one forward.
     ok, still, stays = _on_belt(look, now, float(LONG), dt, positions, velocities, pulls, ahead, surfaces, speeds,
-                                regions)
+                                table)
     near = _near(look, float(LONG), play, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
-                 most, pulls, free, everyone, straight_law, regions, part_centres, part_extents, part_growth,
+                 most, pulls, free, everyone, straight_law, table, part_centres, part_extents, part_growth,
                  has_fixed, listed_at, near_list, near_count, c, h, cos, sin)
     for i in range(m):
         clear[look[i]] = tick + LONG * ahead[look[i]]
@@ -884,9 +883,9 @@ def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, v
     if short.shape[0]:
         these = look[short]
         ok1, still1, _ = _on_belt(these, now[short], 1.0, dt, positions, velocities, pulls, ahead, surfaces, speeds,
-                                  regions)
+                                  table)
         near1 = _near(these, 1.0, play, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
-                      most, pulls, free, everyone, straight_law, regions, part_centres, part_extents, part_growth,
+                      most, pulls, free, everyone, straight_law, table, part_centres, part_extents, part_growth,
                       has_fixed, listed_at, near_list, near_count, c, h, cos, sin)
         for j in range(short.shape[0]):
             i = short[j]
@@ -897,21 +896,21 @@ def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, v
 
 @njit(cache=True)
 def _near(rows, times, play, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most, pulls,
-          free, against, straight_law, regions, part_centres, part_extents, part_growth, has_fixed, listed_at,
+          free, against, straight_law, table, part_centres, part_extents, part_growth, has_fixed, listed_at,
           near_list, near_count, c, h, cos, sin):
     """`_touching` or `_fixed_hit`, for `_look`."""
     near = _touching(rows, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
-                     most, pulls, free, free, against, straight_law, regions, part_centres,
+                     most, pulls, free, free, against, straight_law, table, part_centres,
                      _grown(part_extents, part_growth, ahead, rows, times, dt))
     if has_fixed:
         near = near | _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at,
-                                 near_list, near_count, straight_law, regions, c, h, cos, sin)
+                                 near_list, near_count, straight_law, table, c, h, cos, sin)
     return near
 
 
 @njit(cache=True)
 def _leave(rows, pulled, play, dt, positions, orientations, velocities, spins, masses, radii, half_heights, ahead,
-           most, pulls, free, joined, straight_law, surfaces, speeds, regions, laws, part_centres, part_extents,
+           most, pulls, free, joined, straight_law, surfaces, speeds, table, explicit, part_centres, part_extents,
            part_growth, has_fixed, listed_at, near_list, near_count, c, h, cos, sin):
     """FreeTransport._leaving in one call: every pull afresh (`_pulls`, for `pulled`), then of
     `rows` those steady (upright, tilt under TILT, spin under SPIN, vertical speed under RISE, or
@@ -920,7 +919,7 @@ def _leave(rows, pulled, play, dt, positions, orientations, velocities, spins, m
     masks over `rows` of those that go and those near something."""
     most[:] = 0.0
     if pulled.shape[0]:
-        _pulls(pulled, positions, velocities, masses, ahead, dt, pulls, most, regions, laws)
+        _pulls(pulled, positions, velocities, masses, ahead, dt, explicit, pulls, most, table)
     count = rows.shape[0]
     tilt = math.cos(TILT)
     riding = np.zeros(count, np.bool_)
@@ -931,22 +930,22 @@ def _leave(rows, pulled, play, dt, positions, orientations, velocities, spins, m
         if not (free[n] or (1.0 - 2.0 * (x * x + y * y) > tilt and w[0] * w[0] + w[1] * w[1] + w[2] * w[2] < SPIN * SPIN
                             and abs(velocities[n, 2]) < RISE)):
             continue
-        k = field_at(positions[n, 0], positions[n, 1], positions[n, 2], *regions)
+        k = field_at(positions[n, 0], positions[n, 1], positions[n, 2], table)
         if k >= 0 and abs(positions[n, 2] - half_heights[n] - surfaces[k]) < SINK:
             riding[i], field[i] = True, k
     these = rows[riding]
-    ok = _on_belt(these, field[riding], 2.0, dt, positions, velocities, pulls, ahead, surfaces, speeds, regions)[0]
+    ok = _on_belt(these, field[riding], 2.0, dt, positions, velocities, pulls, ahead, surfaces, speeds, table)[0]
     go, near = np.zeros(count, np.bool_), np.zeros(count, np.bool_)
     these = these[ok]
     if these.shape[0] == 0:
         return go, near
     close = _touching(these, play, 2.0, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
-                      most, pulls, free, joined, np.ones(free.shape[0], np.bool_), straight_law, regions, part_centres,
+                      most, pulls, free, joined, np.ones(free.shape[0], np.bool_), straight_law, table, part_centres,
                       _grown(part_extents, part_growth, ahead, these, 2.0, dt))
     if has_fixed and not close.all():
         rest = these[~close]
         hit = _fixed_hit(rest, 2.0, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at, near_list,
-                         near_count, straight_law, regions, c, h, cos, sin)
+                         near_count, straight_law, table, c, h, cos, sin)
         k = 0
         for j in range(close.shape[0]):
             if not close[j]:
