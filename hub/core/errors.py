@@ -42,3 +42,8 @@ class ScenarioError(PlanthubError):
 
 class SimulationError(PlanthubError):
     """Something failed while a scenario was running."""
+
+
+class CheckpointError(PlanthubError):
+    """A run's state could not be saved or put back: a part that cannot save (named), a snapshot
+    that does not fit the plant, a file that is truncated, corrupt or of another scenario."""

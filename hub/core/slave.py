@@ -16,6 +16,13 @@ class LogicSlave(Protocol):
     the last step, `close()` once; it releases instances, processes and folders and never raises
     for a slave that already failed.
 
+    `save()` gives the slave's whole state at the communication point it has reached (after its
+    last `outputs()`) as bytes, and `restore(state)` puts such bytes back, into this slave or a
+    new one made the same way: stepping on from there gives, bit for bit, what the slave that
+    saved would have given (hub/core/state.py; an FMU through FMI's own FMU-state calls, a
+    participant through the bus's save and restore messages, schemas/wire.md). A slave that
+    cannot raises hub.core.errors.CheckpointError naming itself and why, never saving part of it.
+
     `instance` names the slave in messages. `on_bus` is true for a slave whose logic is served
     over the bus: the run links it to its lockstep before the first point.
     """
@@ -28,5 +35,9 @@ class LogicSlave(Protocol):
     def step(self, t: float, h: float) -> None: ...
 
     def outputs(self) -> list: ...
+
+    def save(self) -> bytes: ...
+
+    def restore(self, state: bytes) -> None: ...
 
     def close(self) -> None: ...

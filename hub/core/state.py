@@ -1,0 +1,171 @@
+"""The state contract: what changes during a run is saved and put back through one small protocol; structure stays as built.
+
+A plant is built from its scenario in a fixed order, so two builds have the same structure: the
+same bodies, slots, flows, components and observers, each in the same place. Everything that
+changes while the plant runs lives in the attributes a class names in `STATE`, or behind its
+own `save_state`/`restore_state` (Drake keeps all state in one Context; here each owner keeps
+its own, and one walk collects it):
+
+    class Latch:
+        STATE = ("entered", "left", "inside")
+
+    class PhysicsWorld:
+        STATE = ("tick", "bodies", "transport", …)    # parts that are Stateful are walked into
+
+`save(owner)` gives plain data (numbers, strings, numpy arrays, lists, dicts, tuples, frozen
+dataclasses and enums) that `dumps` turns into bytes; `restore(owner, state)` puts it back into
+an owner of the same structure, in place: a list, dict, set or array the owner already holds
+keeps its identity (another part may hold it too: a flow's closure holds the signals' lists),
+its contents replaced. An attribute that holds a Stateful object, or a list, tuple or dict of
+them, is walked into rather than copied.
+
+A class that talks to something outside Python (the engine, an FMU, a participant) writes
+`save_state() -> object` and `restore_state(state)`; its `STATE` still names the attributes of
+its own those cover, so that tests/test_checkpoint_audit.py can check that every attribute that
+changes during a run of every module type is covered by some owner's walk.
+"""
+from __future__ import annotations
+
+import collections
+import enum
+import io
+import pickle
+from typing import Any, ClassVar, Protocol, runtime_checkable
+
+import numpy as np
+
+from hub.core.errors import CheckpointError
+
+
+@runtime_checkable
+class Stateful(Protocol):
+    """An owner of run state: `STATE` names the attributes that change during a run."""
+
+    STATE: ClassVar[tuple[str, ...]]
+
+
+def is_stateful(obj) -> bool:
+    return hasattr(type(obj), "STATE") or hasattr(obj, "save_state")
+
+
+def save(owner) -> Any:
+    """The owner's state as plain data (the live containers themselves: `dumps` copies them)."""
+    custom = getattr(owner, "save_state", None)
+    if custom is not None:
+        return custom()
+    return {name: _saved(getattr(owner, name)) for name in type(owner).STATE}
+
+
+def restore(owner, state, where: str = "") -> None:
+    """Put `state` (from `save` of an owner of the same structure) back into `owner`, in place."""
+    where = where or type(owner).__name__
+    custom = getattr(owner, "restore_state", None)
+    if custom is not None:
+        custom(state)
+        return
+    names = type(owner).STATE
+    if not isinstance(state, dict) or set(state) != set(names):
+        raise CheckpointError(f"{where}: the snapshot holds {_keys(state)} but this plant's "
+                              f"{type(owner).__name__} has {sorted(names)}")
+    for name in names:
+        _put(owner, name, state[name], f"{where}.{name}")
+
+
+def _saved(value):
+    if is_stateful(value):
+        return save(value)
+    if isinstance(value, (list, tuple)) and value and all(is_stateful(v) for v in value):
+        return [save(v) for v in value]
+    if isinstance(value, dict) and value and all(is_stateful(v) for v in value.values()):
+        return {k: save(v) for k, v in value.items()}
+    return value
+
+
+def _put(owner, name: str, saved, where: str) -> None:
+    current = getattr(owner, name)
+    if is_stateful(current):
+        restore(current, saved, where)
+    elif isinstance(current, (list, tuple)) and current and all(is_stateful(v) for v in current):
+        if len(saved) != len(current):
+            raise CheckpointError(f"{where}: the snapshot has {len(saved)} parts, this plant {len(current)}")
+        for k, (part, state) in enumerate(zip(current, saved)):
+            restore(part, state, f"{where}[{k}]")
+    elif isinstance(current, dict) and current and all(is_stateful(v) for v in current.values()):
+        if set(saved) != set(current):
+            raise CheckpointError(f"{where}: the snapshot has parts {sorted(saved)}, this plant {sorted(current)}")
+        for key, part in current.items():
+            restore(part, saved[key], f"{where}[{key!r}]")
+    else:
+        setattr(owner, name, into(current, saved))
+
+
+def into(current, saved):
+    """`saved` put into `current` where `current` is a container of the same kind (its identity
+    kept), else `saved` itself."""
+    if isinstance(current, np.ndarray) and isinstance(saved, np.ndarray) \
+            and current.shape == saved.shape and current.dtype == saved.dtype and current.flags.writeable:
+        current[...] = saved
+        return current
+    if type(current) is list and type(saved) is list:
+        current[:] = saved
+        return current
+    if type(current) is dict and type(saved) is dict:
+        current.clear()
+        current.update(saved)
+        return current
+    if type(current) is set and type(saved) is set:
+        current.clear()
+        current.update(saved)
+        return current
+    if type(current) is collections.deque and type(saved) is collections.deque and current.maxlen == saved.maxlen:
+        current.clear()
+        current.extend(saved)
+        return current
+    return saved
+
+
+def _keys(state) -> str:
+    return str(sorted(state)) if isinstance(state, dict) else type(state).__name__
+
+
+# --- bytes ------------------------------------------------------------------------------------
+#: What a snapshot may hold: plain data, numpy arrays and the project's own plain classes. Any
+#: other global a pickle names is refused, so that loading a checkpoint runs no foreign code.
+_ALLOWED_MODULES = ("hub.", "modules.")
+_ALLOWED = {
+    ("builtins", n) for n in ("set", "frozenset", "complex", "slice", "range", "bytearray")
+} | {
+    ("collections", "deque"), ("collections", "OrderedDict"), ("collections", "defaultdict"),
+    ("copyreg", "_reconstructor"), ("builtins", "object"),
+    ("numpy", "dtype"), ("numpy", "ndarray"), ("numpy.core.multiarray", "_reconstruct"),
+    ("numpy._core.multiarray", "_reconstruct"), ("numpy.core.multiarray", "scalar"),
+    ("numpy._core.multiarray", "scalar"), ("numpy._core.numeric", "_frombuffer"),
+    ("numpy.core.numeric", "_frombuffer"),
+}
+
+
+class _Unpickler(pickle.Unpickler):
+    def find_class(self, module: str, name: str):
+        if (module, name) in _ALLOWED or module.startswith(_ALLOWED_MODULES):
+            found = super().find_class(module, name)
+            if module.startswith(_ALLOWED_MODULES) and not (isinstance(found, type) and (
+                    issubclass(found, enum.Enum) or hasattr(found, "__dataclass_fields__")
+                    or issubclass(found, tuple))):
+                raise pickle.UnpicklingError(f"{module}.{name} is not plain data")
+            return found
+        raise pickle.UnpicklingError(f"{module}.{name} is not allowed in a snapshot")
+
+
+def dumps(state) -> bytes:
+    try:
+        return pickle.dumps(state, protocol=5)
+    except (pickle.PicklingError, TypeError, AttributeError) as exc:
+        raise CheckpointError(f"the state holds something that is not plain data: {exc}") from None
+
+
+def loads(data: bytes, where: str):
+    """The state in `data`; anything wrong with it is a CheckpointError naming `where`."""
+    try:
+        return _Unpickler(io.BytesIO(data)).load()
+    except Exception as exc:   # a decoder of outside bytes raises only the project's errors
+        raise CheckpointError(f"{where}: the saved state cannot be read ({type(exc).__name__}: {exc})") from None
