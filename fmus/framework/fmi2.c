@@ -4,6 +4,7 @@
 
 #include "fmi2Functions.h"
 #include "instance.h"
+#include "state.h"
 #include "variables.h"
 
 /* Every message the framework writes fits twice over, escaped. */
@@ -309,49 +310,58 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     return finish(c, status);
 }
 
-/* ------------------------------------------------------------ optional capabilities, all declared false */
+/* ------------------------------------------------------------ FMU state (state.c) */
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
-    (void)FMUstate;
-    return unsupported(c, __func__, "canGetAndSetFMUstate=\"false\"");
+    if (c == NULL) {
+        return fmi2Error;
+    }
+    return finish(c, state_get(c, __func__, FMUstate));
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
-    (void)FMUstate;
-    return unsupported(c, __func__, "canGetAndSetFMUstate=\"false\"");
+    if (c == NULL) {
+        return fmi2Error;
+    }
+    return finish(c, state_set(c, __func__, FMUstate));
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
-    (void)FMUstate;
-    return unsupported(c, __func__, "canGetAndSetFMUstate=\"false\"");
+    if (c == NULL) {
+        return fmi2Error;
+    }
+    return finish(c, state_free(c, __func__, FMUstate));
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size)
 {
-    (void)FMUstate;
-    (void)size;
-    return unsupported(c, __func__, "canSerializeFMUstate=\"false\"");
+    if (c == NULL) {
+        return fmi2Error;
+    }
+    return finish(c, state_serialized_size(c, __func__, FMUstate, size));
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size)
 {
-    (void)FMUstate;
-    (void)serializedState;
-    (void)size;
-    return unsupported(c, __func__, "canSerializeFMUstate=\"false\"");
+    if (c == NULL) {
+        return fmi2Error;
+    }
+    return finish(c, state_serialize(c, __func__, FMUstate, (unsigned char *)serializedState, size));
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate *FMUstate)
 {
-    (void)serializedState;
-    (void)size;
-    (void)FMUstate;
-    return unsupported(c, __func__, "canSerializeFMUstate=\"false\"");
+    if (c == NULL) {
+        return fmi2Error;
+    }
+    return finish(c, state_deserialize(c, __func__, (const unsigned char *)serializedState, size, FMUstate));
 }
+
+/* ------------------------------------------------------------ optional capabilities, all declared false */
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
                                         const fmi2ValueReference vKnown_ref[], size_t nKnown,
@@ -396,7 +406,7 @@ fmi2Status fmi2CancelStep(fmi2Component c)
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
                       fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
-    (void)noSetFMUStatePriorToCurrentPoint; /* there is no saved state to drop */
+    (void)noSetFMUStatePriorToCurrentPoint; /* FMU states are independent copies: nothing to drop */
     if (c == NULL) {
         return fmi2Error;
     }

@@ -4,6 +4,7 @@
 
 #include "fmi3Functions.h"
 #include "instance.h"
+#include "state.h"
 #include "variables.h"
 
 static fmi3Status to_fmi3(Status status)
@@ -352,45 +353,52 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
 
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 {
-    (void)FMUState;
-    return unsupported(instance, __func__, "canGetAndSetFMUState=\"false\"");
+    if (instance == NULL) {
+        return fmi3Error;
+    }
+    return finish(instance, state_get(instance, __func__, FMUState));
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState)
 {
-    (void)FMUState;
-    return unsupported(instance, __func__, "canGetAndSetFMUState=\"false\"");
+    if (instance == NULL) {
+        return fmi3Error;
+    }
+    return finish(instance, state_set(instance, __func__, FMUState));
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState)
 {
-    (void)FMUState;
-    return unsupported(instance, __func__, "canGetAndSetFMUState=\"false\"");
+    if (instance == NULL) {
+        return fmi3Error;
+    }
+    return finish(instance, state_free(instance, __func__, FMUState));
 }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t *size)
 {
-    (void)FMUState;
-    (void)size;
-    return unsupported(instance, __func__, "canSerializeFMUState=\"false\"");
+    if (instance == NULL) {
+        return fmi3Error;
+    }
+    return finish(instance, state_serialized_size(instance, __func__, FMUState, size));
 }
 
 fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, fmi3Byte serializedState[],
                                  size_t size)
 {
-    (void)FMUState;
-    (void)serializedState;
-    (void)size;
-    return unsupported(instance, __func__, "canSerializeFMUState=\"false\"");
+    if (instance == NULL) {
+        return fmi3Error;
+    }
+    return finish(instance, state_serialize(instance, __func__, FMUState, serializedState, size));
 }
 
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[], size_t size,
                                    fmi3FMUState *FMUState)
 {
-    (void)serializedState;
-    (void)size;
-    (void)FMUState;
-    return unsupported(instance, __func__, "canSerializeFMUState=\"false\"");
+    if (instance == NULL) {
+        return fmi3Error;
+    }
+    return finish(instance, state_deserialize(instance, __func__, serializedState, size, FMUState));
 }
 
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns,
@@ -560,7 +568,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     Instance *inst = instance;
     Status status;
 
-    (void)noSetFMUStatePriorToCurrentPoint; /* there is no saved state to drop */
+    (void)noSetFMUStatePriorToCurrentPoint; /* FMU states are independent copies: nothing to drop */
     if (inst == NULL) {
         return fmi3Error;
     }

@@ -20,7 +20,7 @@ static const char *phase_name(Phase phase)
     case PHASE_INITIALIZATION: return "initialization mode";
     case PHASE_STEP: return "step mode";
     case PHASE_TERMINATED: return "the terminated state";
-    case PHASE_ERROR: return "the error state (after a failed call only get, terminate, reset and free work)";
+    case PHASE_ERROR: return "the error state (after a failed call only get, terminate, reset, free and setting an FMU state work)";
     }
     return "an unknown state";
 }

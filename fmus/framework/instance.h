@@ -14,7 +14,7 @@ typedef enum {
     PHASE_INITIALIZATION = 2,
     PHASE_STEP = 4,
     PHASE_TERMINATED = 8,
-    PHASE_ERROR = 16 /* a call returned error; only get, terminate, reset and free remain */
+    PHASE_ERROR = 16 /* a call returned error; only get, terminate, reset, free and set FMU state remain */
 } Phase;
 
 /* Everything one instance owns; nothing lives in globals, so instances in one

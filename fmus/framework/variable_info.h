@@ -1,4 +1,5 @@
-/* Description of one model variable, as generate.py writes it into model_description.c. */
+/* Description of one model variable and of one field of the model's private state, as generate.py
+   writes them into model_description.c. */
 #ifndef VARIABLE_INFO_H
 #define VARIABLE_INFO_H
 
@@ -43,5 +44,14 @@ typedef struct {
     double min; /* int bounds too: every int32 is exact in a double */
     double max;
 } VariableInfo;
+
+/* The C types a ModelState field may have (model.yaml's state types). */
+typedef enum { STATE_REAL, STATE_INT32, STATE_INT64, STATE_BOOL } StateType;
+
+typedef struct {
+    const char *name; /* NULL ends the table */
+    StateType type;
+    size_t offset; /* of the value in ModelState */
+} StateFieldInfo;
 
 #endif
