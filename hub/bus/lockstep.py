@@ -5,7 +5,8 @@ hello naming its inputs and outputs, gets a welcome with its parameters and answ
 initial outputs. Every communication step the hub sends each participant a step message
 (step number, tick, ticks, t, h, inputs) and, before the outputs are used at the next point,
 waits for the output message tagged with that step number. Messages of different participants
-may arrive in any order; each is filed under its sender.
+may arrive in any order; each is filed under its sender. At a communication point the hub may ask
+a participant for its whole state (save) or hand one back (restore), each answered within the lease.
 """
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ import time
 from dataclasses import dataclass, field
 
 from hub.bus.session import Bus, Inbox, local_endpoint
-from hub.core.errors import SimulationError
+from hub.core.errors import CheckpointError, SimulationError
 from hub.bus.launcher import Launched
 from hub.core.registry import did_you_mean
 from hub.core.slots import SlotType
@@ -69,6 +70,8 @@ class _Peer:
     sent_at: float = 0.0
     step_pub: object = None
     welcome_pub: object = None
+    checkpoint_pub: object = None
+    held: bool = False                 # `result` came from a restore: initial outputs sent after it do not replace it
 
     @property
     def name(self) -> str:
@@ -96,6 +99,7 @@ class Lockstep:
         self.tick = 0
         self._closing = False
         self.dropped: dict[tuple[str, str], int] = {}   # (participant, kind) → messages not taken
+        self._tag = 0   # the last save or restore request's tag: an answer is taken only under its own
         self._token = None
 
     # --- start: launch what the scenario launches, wait for everyone ------------------------
@@ -110,6 +114,9 @@ class Lockstep:
                                    lambda payload, peer=peer: inbox.put(("output", peer, payload)))
             peer.step_pub = bus.publisher(wire.logic_key(run, name, "step"), wire.MSGPACK)
             peer.welcome_pub = bus.publisher(wire.logic_key(run, name, "welcome"), wire.MSGPACK)
+            bus.subscribe_payloads(wire.logic_key(run, name, "checkpoint_answer"),
+                                   lambda payload, peer=peer: inbox.put(("checkpoint", peer, payload)))
+            peer.checkpoint_pub = bus.publisher(wire.logic_key(run, name, "checkpoint"), wire.MSGPACK)
         self.publish_state("waiting" if self.peers else "running")
         self._token = bus.declare_token(wire.hub_token(run))
         for peer in self.peers.values():
@@ -195,6 +202,7 @@ class Lockstep:
             values = [values[i] for i in peer.in_order]
         peer.pending = body = wire.step_message(slave.sent, tick, ticks, t, h, values)
         slave.sent += 1
+        peer.held = False
         peer.from_tick = tick
         self.tick = tick + ticks   # the point at which the run now waits for the answers
         peer.sent_at = time.monotonic()
@@ -222,6 +230,83 @@ class Lockstep:
             for item in self.inbox.drain():
                 self._dispatch(item)
 
+    # --- save and restore: a participant's whole state at a communication point -------------------
+    def save(self, slave) -> bytes:
+        """The state bytes of `slave`'s participant after its last step (whose outputs are collected
+        first); CheckpointError naming it and why if it cannot give them."""
+        return self._checkpoint(slave, "save")["state"]
+
+    def restore(self, slave, state: bytes, outputs: list) -> None:
+        """Give `slave`'s participant back `state`; `outputs` (in the scenario's order) are then the
+        outputs of its last step, as they were when the state was saved."""
+        self._checkpoint(slave, "restore", state)
+        peer = slave.peer
+        peer.result, peer.result_n, peer.held = outputs, slave.sent - 1, True
+
+    def _checkpoint(self, slave, op: str, state: bytes | None = None) -> dict:
+        peer = slave.peer
+        label = peer.slave.spec.label
+        if peer.lost or not peer.welcomed:
+            raise CheckpointError(f"{label} cannot {op} its state: it is not on the bus ({self._where()})")
+        # At a communication point: the last step's outputs are in, so the participant is between steps.
+        self.collect(slave)
+        step = slave.sent - 1
+        self._tag += 1
+        tag = self._tag
+        body = wire.save_request(tag, step) if op == "save" else wire.restore_request(tag, step, state)
+        if len(body) > wire.MAX_STATE:
+            raise CheckpointError(f"{label} cannot restore a state of {len(state)} bytes: a restore request "
+                                  f"carries at most {wire.MAX_STATE} ({self._where()})")
+        peer.checkpoint_pub.put(wire.seal(peer.key, body))
+        deadline = time.monotonic() + self.lease
+        others = []   # everything else waits until the answer is in: no step, loss or hello is handled half-way
+        try:
+            while True:
+                item = self.inbox.get(deadline - time.monotonic())
+                if item is None:
+                    raise CheckpointError(
+                        f"{label} did not answer the {op} request within its lease of {self.lease:g} s "
+                        f"({self._where()}): it is frozen, or an older participant that does not know the "
+                        f"message (schemas/wire.md, \"Save and restore\"){self._tail(peer)}")
+                if item[0] == "checkpoint" and item[1] is peer:
+                    answer = self._checkpoint_answer(peer, item[2], op, tag)
+                    if answer is not None:
+                        return answer
+                    continue
+                others.append(item)
+                if item[0] == "token" and not item[1].alive and item[1].key.rsplit("/", 1)[-1] == peer.name:
+                    # Kept for the loss handling of the next collect: the run decides about the loss.
+                    raise CheckpointError(f"{label} {self._gone(peer)} while it was asked to {op} its state "
+                                          f"({self._where()}){self._tail(peer)}")
+        finally:
+            for item in others:
+                self.inbox.put(item)
+
+    def _checkpoint_answer(self, peer: _Peer, payload: bytes, op: str, tag: int) -> dict | None:
+        """The answer to request `tag`, or None for a message to drop; CheckpointError for an error answer."""
+        label = peer.slave.spec.label
+        try:
+            payload = wire.unseal(peer.key, payload)
+        except wire.WireError as exc:
+            self._drop(peer, "foreign", str(exc))
+            return None
+        try:
+            answer = wire.read_checkpoint_answer(payload)
+        except wire.WireError as exc:
+            raise CheckpointError(f"{label} sent a bad answer to the {op} request: {exc} ({self._where()})") from None
+        if answer["tag"] != tag:
+            self._drop(peer, "late checkpoint", f"an answer to request {answer['tag']}, the hub waits for {tag}")
+            return None
+        if answer["op"] != op:
+            raise CheckpointError(f"{label} answered the {op} request as a {answer['op']} request ({self._where()})")
+        if "error" in answer:
+            trace = answer.get("traceback")
+            where = ("\n  its traceback:\n" + "\n".join(f"    {line}" for line in trace[-4000:].rstrip().splitlines())
+                     if isinstance(trace, str) and trace else "")
+            raise CheckpointError(f"{label} could not {op} its state: {answer['error'][:2000]} "
+                                  f"({self._where()}){where}")
+        return answer
+
     # --- what arrives -------------------------------------------------------------------------
     def _dispatch(self, item) -> None:
         kind = item[0]
@@ -229,6 +314,8 @@ class Lockstep:
             self._output(item[1], item[2])
         elif kind == "hello":
             self._hello(item[1])
+        elif kind == "checkpoint":   # a save or restore answer after the hub stopped waiting for it
+            self._drop(item[1], "late checkpoint", "an answer to a save or restore request no longer awaited")
         elif kind == "token":
             message = item[1]
             peer = self.peers.get(message.key.rsplit("/", 1)[-1])
@@ -300,7 +387,7 @@ class Lockstep:
                 raise wire.WireError(f"step {n}: {len(values)} outputs, announced {len(outputs)}")
             if n == -1:
                 peer.ready = peer.welcomed
-                if peer.slave.sent:   # rejoined mid-run: its step results count, not these
+                if peer.slave.sent or peer.held:   # rejoined mid-run (or restored): its step results count, not these
                     return
             elif n != peer.slave.sent - 1:
                 if n > peer.slave.sent - 1 or n < -1:

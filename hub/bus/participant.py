@@ -12,7 +12,8 @@
     raise SystemExit(serve(Doubler()))
 
 Inputs, outputs and parameters are attributes: the hub's values are set before every `step`,
-the outputs read after it. Where to connect comes from the command line (`--run`, `--name`,
+the outputs read after it. A checkpoint of the run saves every attribute of the participant and
+puts them back on restore (`save_state`/`restore_state`; override both for state held elsewhere). Where to connect comes from the command line (`--run`, `--name`,
 `--connect`, `--mode`, `--lease`, `--tls-*`) or, for a process the hub launched, from its environment.
 """
 from __future__ import annotations
@@ -20,13 +21,14 @@ from __future__ import annotations
 import argparse
 import logging
 import os
+import pickle
 import time
 import traceback
 import uuid
 from typing import ClassVar
 
 from hub.bus.session import Bus, Inbox
-from hub.core.errors import PlanthubError
+from hub.core.errors import CheckpointError, PlanthubError
 from hub.bus.settings import BusSettings
 from hub.bus.tls import TlsSettings
 from hub.bus.tls import problems as tls_problems
@@ -34,8 +36,14 @@ from hub.core.slots import SlotType
 from hub.bus import wire
 
 _RESERVED = {"inputs", "outputs", "parameters", "start", "step", "close", "interface", "begin", "advance",
-             "current_outputs"}
+             "current_outputs", "save_state", "restore_state"}
 
+
+#: The library's own attributes, set in `interface()`: derived from the class, not state, so a
+#: default save leaves them out and a restore keeps those of the participant it restores into.
+_INTERNAL = frozenset({"_in", "_out", "_readers", "_in_names", "_in_types", "_out_names", "_events_out"})
+#: The first item of a default state: tells it from other bytes (and from a later layout).
+STATE_FORMAT = "planthub.participant.state/1"
 
 _log = logging.getLogger(__name__)   # a process that sets up no logging still gets its errors on stderr
 
@@ -61,6 +69,49 @@ class Participant:
 
     def close(self) -> None:
         """Called once when the run is over."""
+
+    def save_state(self) -> bytes:
+        """The participant's whole state at this communication point, as bytes only it reads back.
+
+        By default every instance attribute (inputs, outputs, parameters and whatever the logic
+        keeps) except the library's own, pickled in one go (so two attributes that share a list
+        still share it after a restore). Override both this and `restore_state` when the state
+        lives elsewhere (a device, a file, another language's runtime) or is not picklable.
+        An attribute that cannot be pickled (a socket, a lock, an open file) is a CheckpointError
+        that names it.
+
+        The bytes are the participant's business: the hub stores them unread and hands them back to
+        the same participant class for `restore_state`. The default unpickles them there, so they
+        must come from a checkpoint you trust (over the bus only the hub can send them: sealed).
+        """
+        attributes = {name: value for name, value in getattr(self, "__dict__", {}).items() if name not in _INTERNAL}
+        try:
+            return pickle.dumps((STATE_FORMAT, type(self).__qualname__, attributes), protocol=5)
+        except Exception as exc:   # pickle raises PicklingError, TypeError, AttributeError, … for what it cannot take
+            bad = [name for name, value in attributes.items() if not _picklable(value)]
+            what = (f"attribute{'s' if len(bad) > 1 else ''} {', '.join(map(repr, bad))}" if bad
+                    else "its attributes together")
+            raise CheckpointError(f"{type(self).__name__} cannot save {what} ({type(exc).__name__}: {exc}); "
+                                  f"override save_state and restore_state for state that pickle cannot "
+                                  f"take") from None
+
+    def restore_state(self, data: bytes) -> None:
+        """Put back a state `save_state` of this participant class gave: its attributes become the
+        saved ones (one set since then and not saved is removed), the library's own stay."""
+        try:
+            form, kind, attributes = pickle.loads(data)
+        except Exception as exc:   # anything in the bytes may fail to load, in any way
+            raise CheckpointError(f"{type(self).__name__} cannot read the saved state "
+                                  f"({type(exc).__name__}: {exc})") from None
+        if form != STATE_FORMAT or not isinstance(attributes, dict):
+            raise CheckpointError(f"{type(self).__name__}: the saved state is not a participant's default "
+                                  f"state ({STATE_FORMAT})")
+        if kind != type(self).__qualname__:
+            raise CheckpointError(f"{type(self).__name__}: the saved state is a {kind}'s")
+        own = self.__dict__
+        for name in [name for name in own if name not in _INTERNAL and name not in attributes]:
+            del own[name]
+        own.update((name, value) for name, value in attributes.items() if name not in _INTERNAL)
 
     # --- what the protocol loop calls; an adapter (an FMU, another language's binding) overrides these
     def interface(self) -> tuple[list[tuple[str, SlotType]], list[tuple[str, SlotType]]]:
@@ -117,6 +168,14 @@ class Participant:
         for name in self._events_out:
             setattr(self, name, False)   # an event fires once
         return out
+
+
+def _picklable(value) -> bool:
+    try:
+        pickle.dumps(value, protocol=5)
+    except Exception:   # whatever pickle raises for it
+        return False
+    return True
 
 
 def add_options(parser: argparse.ArgumentParser) -> None:
@@ -210,6 +269,8 @@ class _Link:
         self.hub_alive = False
         self.lost_at = None       # when the hub's token went away, while it is away
         self.last = None          # (step number, output message) of the last step served
+        self.at = -1              # the number of the last step served (or restored to): a save is of that point
+        self.begun = False        # the logic has its parameters and started (a rejoin or a restore does not redo it)
         # Steps and outputs are sealed, so no other process can speak for either side (schemas/wire.md,
         # "Sealed messages"): launched by the hub, with its token; joined by itself, with a key agreed
         # in the hello and the welcome (a new one at every join).
@@ -224,9 +285,11 @@ class _Link:
             bus.subscribe_payloads(key("welcome"), lambda p: inbox.put(("welcome", p)))
             bus.subscribe_payloads(key("step"), inbox.put)   # a step is the bare payload: see serve
             bus.subscribe_payloads(wire.control_key(self.run, "state"), lambda p: inbox.put(("state", p)))
+            bus.subscribe_payloads(key("checkpoint"), lambda p: inbox.put(("checkpoint", p)))
             bus.watch_tokens(wire.hub_token(self.run), lambda m: inbox.put(("hub", m.alive)))
             self.output = bus.publisher(key("output"), wire.MSGPACK)
             self.hello = bus.publisher(key("hello"), wire.MSGPACK)
+            self.answer = bus.publisher(key("checkpoint_answer"), wire.MSGPACK)
             bus.declare_token(key())
         except BaseException:
             bus.close()
@@ -267,6 +330,9 @@ class _Link:
                                     f"within {grace:g} s")
             return None
         kind, value = item
+        if kind == "checkpoint":
+            self._checkpoint(value)
+            return None
         if kind == "state" and _map(value).get("state") == "stopped":
             return "stopped"
         if kind == "hub":
@@ -325,8 +391,9 @@ class _Link:
                 self.key = self.hub_key = None
                 _log.warning(f"planthub participant {self.name!r}: the hub's welcome has no `key`: steps and "
                              f"outputs are not sealed, any process on the bus can answer in my place")
-        if self.last is None:
+        if not self.begun:
             self.logic.begin(dict(welcome.get("parameters") or {}), float(welcome.get("time", 0.0)))
+            self.begun = True
         self.output.put(wire.seal(self.key, wire.output_message(-1, self.logic.current_outputs() if self.last is None
                                                                 else wire.unpack(self.last[1])[1])))
         self.lost_at = None if self.hub_alive else time.monotonic()
@@ -351,8 +418,42 @@ class _Link:
                                                                     "".join(traceback.format_tb(exc.__traceback__)))))
             raise PlanthubError(f"step {n} failed: {detail}") from exc
         message = wire.output_message(n, outputs)
-        self.last = (n, message)
+        self.last, self.at = (n, message), n
         self.output.put(wire.seal(self.key, message))
+
+    def _checkpoint(self, payload: bytes) -> None:
+        """Answer a save or restore request (schemas/wire.md, "Save and restore"); a failure is
+        answered with its cause, and the participant goes on: the run decides what a failed
+        checkpoint means."""
+        try:
+            request = wire.read_checkpoint(wire.unseal(self.key, payload))
+        except wire.WireError as exc:
+            # Not the hub's (a stranger cannot seal), or junk: no tag to answer under.
+            _log.warning(f"planthub participant {self.name!r}: dropped a checkpoint message: {exc}")
+            return
+        op, tag, step = request["op"], request["tag"], request["step"]
+        try:
+            if op == "save":
+                if step != self.at:   # the hub collects a step's outputs before it saves: never mid-step
+                    raise CheckpointError(f"asked to save the state after step {step}, but my last step is {self.at}")
+                state = self.logic.save_state()
+                if not isinstance(state, (bytes, bytearray)):
+                    raise CheckpointError(f"save_state gave {type(state).__name__}, not bytes")
+                answer = wire.saved_answer(tag, step, bytes(state))
+                if len(answer) > wire.MAX_STATE:
+                    raise CheckpointError(f"the state is {len(state)} bytes; a save answer carries at most "
+                                          f"{wire.MAX_STATE}")
+            else:
+                self.logic.restore_state(bytes(request["state"]))
+                # Now at the restored point: the next step is step + 1, and no earlier answer stands.
+                self.last, self.at, self.begun = None, step, True
+                answer = wire.restored_answer(tag, step)
+        except Exception as exc:   # the logic's own save or restore may raise anything: the hub is told why
+            detail = str(exc) if isinstance(exc, PlanthubError) else \
+                "".join(traceback.format_exception_only(type(exc), exc)).strip()
+            _log.error(f"planthub participant {self.name!r}: {op} failed: {detail}")
+            answer = wire.checkpoint_error(op, tag, step, detail, "".join(traceback.format_tb(exc.__traceback__)))
+        self.answer.put(wire.seal(self.key, answer))
 
 
 def _map(payload: bytes) -> dict:

@@ -16,6 +16,9 @@ AGENT = "planthub-python/0.1"
 #: The largest control message or data-plane sample decoded, bytes: a step of the bottling plant's
 #: router is under 200 bytes; anything near this is a mistake or an attack, and is refused unread.
 MAX_MESSAGE = 1 << 20
+#: The largest save answer or restore request: they carry a participant's whole state, which may
+#: outgrow a step by far; they are sealed, so a stranger cannot make the hub read one this big.
+MAX_STATE = 1 << 26
 
 
 class WireError(PlanthubError):
@@ -48,7 +51,8 @@ def hub_token(run: str) -> str:
 
 
 def logic_key(run: str, name: str, *parts: str) -> str:
-    """Keys of one lockstep participant: its liveliness token, hello, welcome, step, output."""
+    """Keys of one lockstep participant: its liveliness token, hello, welcome, step, output,
+    checkpoint (save and restore requests) and checkpoint_answer."""
     return control_key(run, "logic", name, *parts)
 
 
@@ -101,10 +105,10 @@ def pack(message) -> bytes:
     return msgpack.packb(message, use_bin_type=True)
 
 
-def unpack(data: bytes):
-    """A control message; WireError for anything that is not one msgpack value of at most MAX_MESSAGE bytes."""
-    if len(data) > MAX_MESSAGE:
-        raise WireError(f"a message of {len(data)} bytes (at most {MAX_MESSAGE})")
+def unpack(data: bytes, limit: int = MAX_MESSAGE):
+    """A control message; WireError for anything that is not one msgpack value of at most `limit` bytes."""
+    if len(data) > limit:
+        raise WireError(f"a message of {len(data)} bytes (at most {limit})")
     try:
         return msgpack.unpackb(data, raw=False, strict_map_key=False)
     except Exception as exc:   # msgpack raises several types for bad input
@@ -282,3 +286,68 @@ def seal_key(private, public: bytes, run: str, name: str, ident: str) -> bytes:
 def error_message(n: int, error: str, trace: str = "") -> bytes:
     """Participant → hub, instead of outputs: step `n` failed (`error` one line, `trace` where)."""
     return pack({"step": n, "error": error, **({"traceback": trace} if trace else {})})
+
+
+# --- save and restore: a participant's whole state at a communication point (schemas/wire.md) ------
+CHECKPOINT_OPS = ("save", "restore")
+
+
+def save_request(tag: int, step: int) -> bytes:
+    """Hub → participant: give your whole state as it is after step `step` (-1: before any step).
+    `tag` is new for every request; the answer carries it back."""
+    return pack({"op": "save", "tag": tag, "step": step})
+
+
+def restore_request(tag: int, step: int, state: bytes) -> bytes:
+    """Hub → participant: put back `state` (bytes a save gave); the next step is `step` + 1."""
+    return pack({"op": "restore", "tag": tag, "step": step, "state": state})
+
+
+def read_checkpoint(data: bytes) -> dict:
+    """A save or restore request (a participant reads it); WireError for anything else."""
+    message = unpack(data, MAX_STATE)
+    if not (isinstance(message, dict) and message.get("op") in CHECKPOINT_OPS
+            and type(message.get("tag")) is int and type(message.get("step")) is int and message["step"] >= -1):
+        raise WireError(f"checkpoint message: expected {{op: save or restore, tag, step}}, got {_brief(message)}")
+    if message["op"] == "restore" and not isinstance(message.get("state"), (bytes, bytearray)):
+        raise WireError(f"restore message: `state` must be raw bytes (msgpack bin), got {_what(message.get('state'))}")
+    return message
+
+
+def saved_answer(tag: int, step: int, state: bytes) -> bytes:
+    """Participant → hub: its state after step `step`, opaque bytes only it reads back."""
+    return pack({"op": "save", "tag": tag, "step": step, "state": state})
+
+
+def restored_answer(tag: int, step: int) -> bytes:
+    """Participant → hub: the state of the restore request `tag` is back in place."""
+    return pack({"op": "restore", "tag": tag, "step": step, "ok": True})
+
+
+def checkpoint_error(op: str, tag: int, step: int, error: str, trace: str = "") -> bytes:
+    """Participant → hub, instead of the answer: the save or restore failed (`error` says why)."""
+    return pack({"op": op, "tag": tag, "step": step, "error": error, **({"traceback": trace} if trace else {})})
+
+
+def read_checkpoint_answer(data: bytes) -> dict:
+    """A participant's answer to a save or restore request (the hub reads it); WireError for anything
+    that is not one: a save answer has `state` (bin), a restore answer `ok` true, either may have
+    `error` (a string) instead."""
+    message = unpack(data, MAX_STATE)
+    if not (isinstance(message, dict) and message.get("op") in CHECKPOINT_OPS and type(message.get("tag")) is int
+            and type(message.get("step")) is int):
+        raise WireError(f"checkpoint answer: expected {{op, tag, step, state | ok | error}}, got {_brief(message)}")
+    if "error" in message:
+        if not isinstance(message["error"], str):
+            raise WireError(f"checkpoint answer: `error` must be a string, got {_what(message['error'])}")
+    elif message["op"] == "save" and not isinstance(message.get("state"), (bytes, bytearray)):
+        raise WireError(f"save answer: `state` must be raw bytes (msgpack bin), got {_what(message.get('state'))}")
+    elif message["op"] == "restore" and message.get("ok") is not True:
+        raise WireError(f"restore answer: expected `ok`: true or an `error`, got {_brief(message)}")
+    return message
+
+
+def _brief(value) -> str:
+    """A received value for a message: its repr, cut short (a state may be megabytes)."""
+    text = repr(value)
+    return text if len(text) <= 200 else text[:200] + "…"

@@ -12,7 +12,8 @@ from __future__ import annotations
 import importlib
 import traceback
 
-from hub.core.errors import PlanthubError, SimulationError
+from hub.core.errors import CheckpointError, PlanthubError, SimulationError
+from hub.logic.participant_state import pack_state, read_state
 from hub.bus.lockstep import RemoteSpec, misfit
 from hub.bus import wire
 from hub.core.slots import SlotType
@@ -99,6 +100,31 @@ class InProcessSlave:
 
     def outputs(self) -> list:
         return self._latest
+
+    def save(self) -> bytes:
+        """The Participant's own save_state, with the inputs and outputs of its last step: the bytes
+        a participant on the bus gives (hub/logic/participant_state.py)."""
+        state = self._checkpoint(self.logic.save_state, "save")
+        if not isinstance(state, (bytes, bytearray)):
+            raise CheckpointError(f"{self.spec.label} (in-process) cannot save its state: save_state gave "
+                                  f"{type(state).__name__}, not bytes")
+        return pack_state(self.spec, self._values, self._latest, bytes(state))
+
+    def restore(self, state: bytes) -> None:
+        """Put back a state saved here or over the bus; the outputs of its last step are again what
+        `outputs()` gives, its inputs those `set_inputs` gave."""
+        where = f"{self.spec.label} (in-process)"
+        inputs, outputs, own = read_state(self.spec, state, where)
+        self._checkpoint(lambda: self.logic.restore_state(own), "restore")
+        self._latest, self._values = outputs, inputs
+
+    def _checkpoint(self, call, op: str):
+        try:
+            return call()
+        except Exception as exc:   # a participant's own save or restore may raise anything
+            detail = str(exc) if isinstance(exc, PlanthubError) else \
+                "".join(traceback.format_exception_only(type(exc), exc)).strip()
+            raise CheckpointError(f"{self.spec.label} (in-process) could not {op} its state: {detail}") from exc
 
     def close(self) -> None:
         self.logic.close()

@@ -2,7 +2,8 @@
 from __future__ import annotations
 
 from hub.bus.lockstep import Lockstep, RemoteSpec
-from hub.core.errors import SimulationError
+from hub.core.errors import CheckpointError, SimulationError
+from hub.logic.participant_state import pack_state, read_state
 
 
 class RemoteSlave:
@@ -34,6 +35,23 @@ class RemoteSlave:
 
     def outputs(self) -> list:
         return self._require().collect(self)
+
+    def save(self) -> bytes:
+        """The participant's state (asked over the bus) with the inputs and outputs of its last step."""
+        if self.link is None:
+            raise CheckpointError(f"{self.spec.label} cannot save its state: it is not linked to a running lockstep")
+        state = self.link.save(self)   # the last step's outputs are collected first
+        return pack_state(self.spec, self._inputs, self.peer.result, state)
+
+    def restore(self, state: bytes) -> None:
+        """Hand the participant back a state (from this transport or the in-process one): read here
+        first, so a state that does not fit never reaches the participant."""
+        if self.link is None:
+            raise CheckpointError(f"{self.spec.label} cannot restore its state: it is not linked to a running "
+                                  f"lockstep")
+        inputs, outputs, own = read_state(self.spec, state, self.spec.label)
+        self.link.restore(self, own, outputs)
+        self._inputs = inputs
 
     def _require(self) -> Lockstep:
         if self.link is None:
