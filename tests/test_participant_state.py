@@ -60,11 +60,21 @@ def in_process(kind: str = "counter", spec: RemoteSpec = SPEC):
     return InProcessSlave(spec, logic)
 
 
+DRIVE = RemoteSpec("drive", (("run", SlotType.BOOL), ("speed_setpoint", SlotType.REAL)),
+                   (("speed", SlotType.REAL), ("running", SlotType.BOOL)), parameters={"ramp": 0.5}, join_timeout=30.0)
+
+
+def drive_inputs(k: int) -> list:
+    return [k % 40 < 25, 0.1 + (k % 7) * 0.05]
+
+
 @contextlib.contextmanager
 def on_bus(kind: str = "counter", spec: RemoteSpec = SPEC, lease: float = 1.0):
     """A slave whose participant process the lockstep launches (and stops, whatever happens)."""
     if kind == "control":
         command = (sys.executable, "-m", "modules.plant_control", "--lanes", ",".join(LANES))
+    elif kind == "from_the_doc":
+        command = (sys.executable, "-m", "tests.participants.from_the_doc")
     else:
         command = (sys.executable, "-m", "tests.participants.stateful", kind)
     spec = RemoteSpec(spec.name, spec.inputs, spec.outputs, spec.parameters, command=command, cwd=str(ROOT),
@@ -154,6 +164,18 @@ def test_the_plant_control_participant_saves_and_restores_with_the_default():
         drive(remote, 40, 50, control_inputs)
         remote.restore(state)
         assert drive(remote, 9, 40, control_inputs) == later
+
+
+def test_a_participant_written_from_the_wire_document_saves_and_restores_its_own_bytes():
+    """tests/participants/from_the_doc.py: save and restore from schemas/wire.md item 9 alone, with
+    a state of its own making (not pickle)."""
+    with on_bus("from_the_doc", DRIVE) as remote:
+        drive(remote, 0, 30, drive_inputs)
+        state = remote.save()
+        later = drive(remote, 30, 90, drive_inputs)
+        remote.restore(state)
+        assert drive(remote, 30, 90, drive_inputs) == later
+    assert len(set(later)) > 10   # the ramp moved
 
 
 def test_a_participant_whose_state_cannot_be_saved_is_named():
@@ -253,3 +275,24 @@ def test_a_bad_saved_state_gives_a_checkpoint_error(data):
         read_state(SPEC, data, "here")
     with pytest.raises(CheckpointError):
         in_process().restore(data)
+
+
+def test_an_fmu_served_over_the_bus_saves_and_restores_its_fmu_state():
+    """`planthub serve-fmu`: the participant's state is the FMU's own (FMI's FMU state, serialized)."""
+    from .fmus.fmu_support import build
+
+    fmu = build(ROOT / "build" / "fmus") / "belt_drive-fmi2.fmu"
+    spec = RemoteSpec(DRIVE.name, DRIVE.inputs, DRIVE.outputs, DRIVE.parameters,
+                      command=(sys.executable, "-m", "hub", "serve-fmu", str(fmu)), cwd=str(ROOT), join_timeout=30.0)
+    slave = RemoteSlave(spec, RATE)
+    with Bus(BusSettings()) as bus:
+        lockstep = Lockstep(bus, RUN, [slave], lease=1.0, on_loss="stop", rate=RATE)
+        try:
+            lockstep.start()
+            drive(slave, 0, 30, drive_inputs)
+            state = slave.save()
+            later = drive(slave, 30, 90, drive_inputs)
+            slave.restore(state)
+            assert drive(slave, 30, 90, drive_inputs) == later
+        finally:
+            lockstep.close("test over")

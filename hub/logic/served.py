@@ -41,6 +41,13 @@ class FmuParticipant(Participant):
     def current_outputs(self) -> list:
         return [wire.to_wire(k, x) for (_, k, _), x in zip(self.ports_out, self.slave.outputs())]
 
+    def save_state(self) -> bytes:
+        """The FMU slave's own state (FMI's FMU state, serialized): its attributes are not the state."""
+        return self.slave.save()
+
+    def restore_state(self, data: bytes) -> None:
+        self.slave.restore(data)
+
     def close(self) -> None:
         if self.slave is not None:
             self.slave.close()

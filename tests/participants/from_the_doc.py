@@ -25,8 +25,10 @@ def main() -> int:
         bus.subscribe(f"{me}/welcome", lambda m: inbox.put(("welcome", m.payload)))
         bus.subscribe(f"{me}/step", lambda m: inbox.put(("step", m.payload)))
         bus.subscribe(f"{base}/state", lambda m: inbox.put(("state", m.payload)))
+        bus.subscribe(f"{me}/checkpoint", lambda m: inbox.put(("checkpoint", m.payload)))
         bus.watch_tokens(f"{base}/hub", lambda m: inbox.put(("hub", m.alive)))
         output = bus.publisher(f"{me}/output", "application/msgpack")
+        answer = bus.publisher(f"{me}/checkpoint_answer", "application/msgpack")
         bus.declare_token(me)
         hello = msgpack.packb({"protocol": 1, "name": name, "id": ident, "agent": "from-the-doc",
                                "token": os.environ["PLANTHUB_TOKEN"],   # launched by the hub
@@ -59,6 +61,7 @@ def main() -> int:
             return hmac.digest(key, body, "sha256")[:16] + body
 
         output.put(sealed(msgpack.packb([-1, [False, speed]])))
+        at = -1   # the last step answered: a save is of the state after it
         while True:
             item = inbox.get(30)
             if item is None:
@@ -66,11 +69,23 @@ def main() -> int:
             kind, payload = item
             if kind == "state" and msgpack.unpackb(payload)["state"] == "stopped":
                 return 0
-            if kind != "step":
+            if kind not in ("step", "checkpoint"):
                 continue
             tag, body = payload[:16], payload[16:]
             if not hmac.compare_digest(tag, hmac.digest(key, body, "sha256")[:16]):
                 continue   # not the hub's
+            if kind == "checkpoint":   # item 9: the state is ours to encode, here the speed as msgpack
+                request = msgpack.unpackb(body)
+                reply = {"op": request["op"], "tag": request["tag"], "step": request["step"]}
+                if request["op"] == "save" and request["step"] != at:
+                    reply["error"] = f"asked to save after step {request['step']}, my last step is {at}"
+                elif request["op"] == "save":
+                    reply["state"] = msgpack.packb(["belt drive", speed])
+                else:
+                    what, speed = msgpack.unpackb(request["state"])
+                    last, at, reply["ok"] = None, request["step"], True
+                answer.put(sealed(msgpack.packb(reply)))
+                continue
             n, _tick, _ticks, t, h, (setpoint, go) = msgpack.unpackb(body)
             if last is not None and last[0] == n:
                 output.put(last[1])
@@ -82,7 +97,7 @@ def main() -> int:
                     speed = target
                 else:
                     speed += most if gap > 0 else -most
-            last = (n, sealed(msgpack.packb([n, [speed != 0.0, speed]])))
+            last, at = (n, sealed(msgpack.packb([n, [speed != 0.0, speed]]))), n
             output.put(last[1])
 
 
