@@ -15,6 +15,7 @@ from math import copysign
 from pathlib import Path
 from xml.etree import ElementTree
 
+import msgpack
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
@@ -22,7 +23,7 @@ from fmpy.fmi2 import fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE
 from fmpy.fmi3 import FMU3Slave
 
 from hub.core import scratch
-from hub.core.errors import PlanthubError, SimulationError
+from hub.core.errors import CheckpointError, PlanthubError, SimulationError
 from hub.core.logic_spec import CO_SIMULATION, MODEL_EXCHANGE
 from hub.core.slots import INT_RANGE, SlotType
 from hub.logic.fmi_variables import FmuVariable, map_variables
@@ -55,6 +56,8 @@ class FmuInterface:
     event_indicators: int = 0  # model exchange
     completed_step: bool = False   # model exchange: needsCompletedIntegratorStep
     event_mode: bool = False   # FMI 3 co-simulation: hasEventMode (events handled by the importer)
+    get_set_state: tuple[str, ...] = ()     # the interfaces declaring canGetAndSetFMUstate (FMI 3: …FMUState)
+    serialize_state: tuple[str, ...] = ()   # the interfaces declaring canSerializeFMUstate (FMI 3: …FMUState)
 
     def of(self, causality: str) -> list[FmuVariable]:
         return [v for v in self.variables.values() if v.causality == causality]
@@ -70,6 +73,16 @@ class FmuInterface:
 
     def identifier_of(self, kind: str) -> str:
         return dict(self.identifiers)[kind]
+
+    def missing_state_flag(self, kind: str) -> str | None:
+        """The capability flag the `kind` interface lacks for a checkpoint (FMU states got, set and
+        turned into bytes), spelled as its FMI version spells it; None when it has both."""
+        spelled = "FMUstate" if self.fmi_version == "2.0" else "FMUState"
+        if kind not in self.get_set_state:
+            return f"canGetAndSet{spelled}"
+        if kind not in self.serialize_state:
+            return f"canSerialize{spelled}"
+        return None
 
 
 def inspect_fmu(path: Path) -> FmuInterface:
@@ -139,7 +152,10 @@ def _read_interface(path: Path) -> FmuInterface:
                         states=md.numberOfContinuousStates if me else 0,
                         event_indicators=md.numberOfEventIndicators if me else 0,
                         completed_step=bool(me and me.needsCompletedIntegratorStep),
-                        event_mode=bool(cs and version == "3.0" and getattr(cs, "hasEventMode", False)))
+                        event_mode=bool(cs and version == "3.0" and getattr(cs, "hasEventMode", False)),
+                        # fmpy reads both versions' flags into the FMI 2 spelling
+                        get_set_state=tuple(k for k, part in offered if part.canGetAndSetFMUstate),
+                        serialize_state=tuple(k for k, part in offered if part.canSerializeFMUstate))
 
 
 def validate(path: Path) -> list[str]:
@@ -364,6 +380,88 @@ class FmuSlave:
             t, h = reached, end - reached   # returned early at an event: on to the communication point
         raise SimulationError(self._failure(f"returned early more than {self.MAX_EVENTS} times in one step"))
 
+    # --- checkpoints (hub.core.slave): FMI's own FMU state, in bytes, beside what this side holds
+    def save(self) -> bytes:
+        """The FMU's serialized FMU state with the time and the inputs it holds (so that a restored
+        slave skips the same writes this one would), packed with msgpack under `_STATE_FORMAT`."""
+        self._checkpoint_capable("save")
+        return msgpack.packb({"format": _STATE_FORMAT, "guid": self.interface.guid, "kind": self.KIND,
+                              "time": self.time, "inputs": self._written, "fmu": self._fmu_state(),
+                              "own": self._save_own()}, use_bin_type=True)
+
+    def restore(self, state: bytes) -> None:
+        """Put back what `save` gave, in this instance or another made the same way: the FMU's state
+        set from its bytes (the FMU checks them: its model, size, magic), then this side's."""
+        self._checkpoint_capable("restore")
+        saved = self._read_state(state)
+        self._written = None   # until the FMU holds the saved inputs: a failed restore leaves them unknown
+        self._restore_own(saved["own"])   # checked before the FMU is touched
+        self._set_fmu_state(saved["fmu"])
+        self.time = saved["time"]
+        self._written = saved["inputs"]
+
+    def _save_own(self):
+        """What a subclass holds beside the FMU (msgpack data)."""
+        return None
+
+    def _restore_own(self, own) -> None:
+        pass
+
+    def _checkpoint_capable(self, what: str) -> None:
+        flag = self.interface.missing_state_flag(self.KIND)
+        if flag is not None:
+            raise CheckpointError(f"FMU instance {self.instance!r} ({self.interface.path}): cannot {what} its state: "
+                                  f"its modelDescription.xml does not declare {flag}=\"true\" for {self.KIND}, so "
+                                  f"it cannot be checkpointed")
+        if self._fmu is None:
+            raise CheckpointError(f"FMU instance {self.instance!r} ({self.interface.path.name}): cannot {what} its "
+                                  f"state: it is closed")
+
+    def _checkpoint(self, function: str, fn, *args):
+        """`_call`, its failure a CheckpointError (the same message: instance, function, FMU log)."""
+        try:
+            return self._call(function, fn, *args)
+        except SimulationError as exc:
+            raise CheckpointError(str(exc)) from None
+
+    def _fmu_state(self) -> bytes:
+        fmu = self._fmu
+        state = self._checkpoint("getFMUState", fmu.getFMUState)
+        try:
+            return self._checkpoint("serializeFMUState", fmu.serializeFMUState, state)
+        finally:
+            self._checkpoint("freeFMUState", fmu.freeFMUState, state)
+
+    def _set_fmu_state(self, data: bytes) -> None:
+        fmu = self._fmu
+        state = self._checkpoint("deserializeFMUState", fmu.deserializeFMUState, data)
+        try:
+            self._checkpoint("setFMUState", fmu.setFMUState, state)
+        finally:
+            self._checkpoint("freeFMUState", fmu.freeFMUState, state)
+
+    def _read_state(self, data) -> dict:
+        """The fields of bytes `save` made for an instance of this FMU; CheckpointError naming the
+        instance and what does not fit."""
+        where = f"FMU instance {self.instance!r} ({self.interface.path.name})"
+        try:
+            saved = msgpack.unpackb(data, raw=False, strict_map_key=True) \
+                if isinstance(data, (bytes, bytearray)) else None
+        except Exception as exc:   # msgpack raises several types for bytes that are not its own
+            raise CheckpointError(f"{where}: the saved state cannot be read ({type(exc).__name__}: {exc})") from None
+        if not (isinstance(saved, dict) and saved.get("format") == _STATE_FORMAT):
+            raise CheckpointError(f"{where}: the saved state is not an FMU slave's ({_STATE_FORMAT})")
+        if saved.get("guid") != self.interface.guid or saved.get("kind") != self.KIND:
+            raise CheckpointError(f"{where}: the saved state is of another FMU (guid {saved.get('guid')}, "
+                                  f"{saved.get('kind')}), not of this one (guid {self.interface.guid}, {self.KIND})")
+        inputs, time_ = saved.get("inputs"), saved.get("time")
+        if not (inputs is None or (isinstance(inputs, list) and len(inputs) == self._in.count)):
+            raise CheckpointError(f"{where}: the saved state holds {len(inputs) if isinstance(inputs, list) else 'no'}"
+                                  f" inputs, this instance has {self._in.count}")
+        if not isinstance(time_, (int, float)) or not isinstance(saved.get("fmu"), bytes):
+            raise CheckpointError(f"{where}: the saved state holds no time or no FMU state")
+        return saved
+
     def close(self) -> None:
         fmu, self._fmu = self._fmu, None
         if fmu is not None and getattr(fmu, "component", None):
@@ -374,6 +472,10 @@ class FmuSlave:
             fmu.freeInstance()
         _fmi2_slaves.pop(getattr(self, "_env", None), None)
         shutil.rmtree(self._dir, ignore_errors=True)
+
+
+#: names the layout of `FmuSlave.save`'s bytes; a later layout gets another
+_STATE_FORMAT = "planthub.fmu-slave/1"
 
 
 def _route_fmi2_log(env, name, status, category, message) -> None:

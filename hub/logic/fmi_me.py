@@ -8,7 +8,7 @@ import numpy as np
 from fmpy.fmi2 import FMU2Model
 from fmpy.fmi3 import FMU3Model
 
-from hub.core.errors import SimulationError
+from hub.core.errors import CheckpointError, SimulationError
 from hub.core.logic_spec import CO_SIMULATION, MODEL_EXCHANGE
 from hub.logic.fmi import FmuInterface, FmuSlave, held
 
@@ -55,6 +55,13 @@ class FmuModel(FmuSlave):
     Each event: enterEventMode, the discrete states iterated to a fixed point (bounded), back to
     continuous-time mode, the solver restarted from the new states. Outputs are read in
     continuous-time mode at t + h.
+
+    Checkpoints (`save`/`restore`): with the euler solver, the FMU's state plus the inputs it
+    holds, its next time event and the event indicators the solver compares with — everything a
+    step reads — so a restored instance goes on bit for bit. With cvode they are refused with a
+    CheckpointError: CVODE's history (its order, step size and Nordsieck array) carries over
+    communication points, and fmpy's binding can neither read nor set it, so a restored run would
+    restart the solver and differ in the last bits.
     """
 
     KIND = MODEL_EXCHANGE
@@ -114,6 +121,31 @@ class FmuModel(FmuSlave):
         self._call("set inputs", self._in.set, values)
         self._inputs = values
         self._event()
+
+    def _checkpoint_capable(self, what: str) -> None:
+        super()._checkpoint_capable(what)
+        if self.integration.solver != "euler":
+            raise CheckpointError(
+                f"FMU instance {self.instance!r} ({self.interface.path}): cannot {what} its state: it is integrated "
+                f"with {self.integration.solver}, whose history between communication points (order, step size, "
+                f"Nordsieck array) fmpy's CVODE binding cannot save, so a restored run would not be bit-identical; "
+                f"integrate it with solver: euler to checkpoint it")
+
+    def _save_own(self):
+        timed, at = self._next_event
+        return {"inputs": self._inputs, "next_event": [bool(timed), float(at)], "z": self._solver.z.tolist()}
+
+    def _restore_own(self, own) -> None:
+        where = f"FMU instance {self.instance!r} ({self.interface.path.name})"
+        try:
+            inputs, (timed, at), z = own["inputs"], own["next_event"], own["z"]
+            if not (inputs is None or len(inputs) == self._in.count) or len(z) != len(self._solver.z):
+                raise ValueError("inputs or event indicators of another count")
+            self._solver.z[:] = z
+        except (TypeError, KeyError, ValueError) as exc:
+            raise CheckpointError(f"{where}: the saved state of its solver does not fit: {exc}") from None
+        self._inputs = inputs
+        self._next_event = (bool(timed), float(at))
 
     def _integrate(self, now: float, h: float) -> None:
         end = now + h

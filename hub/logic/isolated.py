@@ -6,7 +6,7 @@ import os
 import signal
 
 from hub.core import scratch
-from hub.core.errors import SimulationError
+from hub.core.errors import CheckpointError, SimulationError
 from hub.core.lifetime import die_with_parent
 from hub.logic.fmi import FmuInterface
 from hub.logic.fmi_me import Integration, open_fmu
@@ -16,6 +16,8 @@ from hub.logic.fmi_me import Integration, open_fmu
 STEP_TIMEOUT = 10.0
 #: s its worker may take to start, instantiate and initialise the FMU
 START_TIMEOUT = 30.0
+#: each message's call, in the message of a worker killed for not answering in time
+_WHAT = {"step": "its step", "outputs": "its start", "save": "saving its state", "restore": "restoring its state"}
 
 
 class IsolatedFmu:
@@ -55,7 +57,7 @@ class IsolatedFmu:
             if not self._conn.poll(limit):   # no wait without a limit: a hung FMU is killed
                 self._process.kill()
                 self._process.join(5)
-                what = "its step" if message[0] == "step" else "its start"
+                what = _WHAT[message[0]]
                 raise SimulationError(
                     f"FMU instance {self.instance!r} ({self.interface.path.name}) at t = {self.time:.9g} s: "
                     f"{what} did not return within {limit:g} s (step_timeout), so its worker process was killed; "
@@ -65,6 +67,8 @@ class IsolatedFmu:
             raise SimulationError(self._died()) from None
         if kind == "error":
             raise SimulationError(payload)
+        if kind == "checkpoint":
+            raise CheckpointError(payload)
         return payload
 
     def _died(self) -> str:
@@ -87,6 +91,13 @@ class IsolatedFmu:
 
     def outputs(self) -> list:
         return self._latest
+
+    def save(self) -> bytes:
+        """The child's FmuSlave.save bytes, so a state saved here restores in the hub's process and back."""
+        return self._ask(("save",))
+
+    def restore(self, state: bytes) -> None:
+        self.time, self._latest = self._ask(("restore", bytes(state)))
 
     def close(self) -> None:
         if self._process.is_alive():
@@ -128,11 +139,20 @@ def _serve(conn, interface, instance, inputs, outputs, parameters, start_time, p
             if message[0] == "close":
                 break
             try:
+                if message[0] == "save":
+                    conn.send(("ok", slave.save()))
+                    continue
+                if message[0] == "restore":
+                    slave.restore(message[1])
+                    conn.send(("ok", (slave.time, slave.outputs())))
+                    continue
                 if message[0] == "step":
                     _, values, t, h = message
                     slave.set_inputs(values)
                     slave.step(t, h)
                 conn.send(("ok", slave.outputs()))
+            except CheckpointError as exc:   # the parent raises the same kind
+                conn.send(("checkpoint", str(exc)))
             except SimulationError as exc:
                 conn.send(("error", str(exc)))
     except EOFError:

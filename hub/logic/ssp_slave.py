@@ -1,11 +1,17 @@
 """An SSP's FMUs run as one logic slave: its connections routed inside, its system connectors the slave's inputs and outputs."""
 from __future__ import annotations
 
-from hub.core.errors import SimulationError
+import msgpack
+
+from hub.core.errors import CheckpointError, SimulationError
 from hub.logic.fmi import FmuSlave
 from hub.logic.fmi_me import open_fmu
 from hub.logic.ssp import SspSystem
 from hub.logic.watchdog import WATCHDOG
+
+
+#: names the layout of `SspSlave.save`'s bytes
+_STATE_FORMAT = "planthub.ssp-slave/1"
 
 
 class SspSlave:
@@ -87,6 +93,40 @@ class SspSlave:
 
     def outputs(self) -> list:
         return [self._value(r) for r in self._out]
+
+    def save(self) -> bytes:
+        """Every component's own saved state (each an FmuSlave's bytes) with what this slave holds
+        between steps: the system inputs of the last point and the outputs each component gave,
+        which the next step routes. A component that cannot save makes the whole system refuse."""
+        try:
+            parts = [slave.save() for slave in self._parts]
+        except CheckpointError as exc:
+            raise CheckpointError(f"SSP instance {self.instance!r}: a component cannot save its state: "
+                                  f"{exc}") from None
+        return msgpack.packb({"format": _STATE_FORMAT, "parts": [s.instance for s in self._parts], "states": parts,
+                              "inputs": self._inputs, "latest": self._latest, "time": self.time}, use_bin_type=True)
+
+    def restore(self, state: bytes) -> None:
+        where = f"SSP instance {self.instance!r}"
+        try:
+            saved = msgpack.unpackb(state, raw=False) if isinstance(state, (bytes, bytearray)) else None
+        except Exception as exc:   # msgpack raises several types for bytes that are not its own
+            raise CheckpointError(f"{where}: the saved state cannot be read ({type(exc).__name__}: {exc})") from None
+        if not (isinstance(saved, dict) and saved.get("format") == _STATE_FORMAT):
+            raise CheckpointError(f"{where}: the saved state is not an SSP slave's ({_STATE_FORMAT})")
+        names = [s.instance for s in self._parts]
+        # Components are named <instance>.<component>: a system restored under another object name still fits.
+        own = [n.split(".", 1)[-1] for n in names]
+        theirs = [str(n).split(".", 1)[-1] for n in saved.get("parts") or []]
+        states, latest, inputs = saved.get("states"), saved.get("latest"), saved.get("inputs")
+        if theirs != own or not isinstance(states, list) or len(states) != len(own) \
+                or not isinstance(latest, list) or len(latest) != len(own) \
+                or not isinstance(inputs, list) or len(inputs) != len(self._inputs):
+            raise CheckpointError(f"{where}: the saved state is of a system with components {theirs}, this one has "
+                                  f"{own} (or its inputs do not fit)")
+        for slave, part in zip(self._parts, states):
+            slave.restore(part)
+        self._latest, self._inputs, self.time = latest, inputs, saved.get("time")
 
     def close(self) -> None:
         failure = None

@@ -1,7 +1,8 @@
 /* A stand-in for another tool's FMI 2.0 model-exchange-only FMU: a ball dropped from h0 that bounces
    with restitution e. Its height is the event indicator (a state event at each impact); a bounce
    slower than v_min leaves the ball lying still, so the impacts do not pile up (no Zeno chatter).
-   Functions it does not implement are generated stubs (tests/foreign_fmus.py). */
+   It can get, set and serialize its FMU state. Functions it does not implement are generated stubs
+   (tests/foreign_fmus.py). */
 #include <float.h>
 #include <stdlib.h>
 #include <string.h>
@@ -244,5 +245,65 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
         }
         value[i] = m->bounces;
     }
+    return fmi2OK;
+}
+
+/* FMU state: the Model struct holds no pointer, so a copy of it is the whole state and its bytes
+   the serialized form (a checkpoint test of model exchange needs one FMU that can). */
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state)
+{
+    Model *copy = *state != NULL ? *state : malloc(sizeof *copy);
+
+    if (copy == NULL) {
+        return fmi2Error;
+    }
+    *copy = *(Model *)c;
+    *state = copy;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state)
+{
+    if (state == NULL) {
+        return fmi2Error;
+    }
+    *(Model *)c = *(Model *)state;
+    return fmi2OK;
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state)
+{
+    free(*state);
+    *state = NULL;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *size)
+{
+    *size = sizeof(Model);
+    return fmi2OK;
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[], size_t size)
+{
+    if (size != sizeof(Model)) {
+        return fmi2Error;
+    }
+    memcpy(bytes, state, sizeof(Model));
+    return fmi2OK;
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size, fmi2FMUstate *state)
+{
+    if (size != sizeof(Model)) {
+        return fmi2Error;
+    }
+    if (*state == NULL) {
+        *state = malloc(sizeof(Model));
+    }
+    if (*state == NULL) {
+        return fmi2Error;
+    }
+    memcpy(*state, bytes, sizeof(Model));
     return fmi2OK;
 }
