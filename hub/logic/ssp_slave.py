@@ -121,9 +121,10 @@ class SspSlave:
         states, latest, inputs = saved.get("states"), saved.get("latest"), saved.get("inputs")
         if theirs != own or not isinstance(states, list) or len(states) != len(own) \
                 or not isinstance(latest, list) or len(latest) != len(own) \
-                or not isinstance(inputs, list) or len(inputs) != len(self._inputs):
+                or not isinstance(inputs, list) or len(inputs) != len(self._inputs) \
+                or not isinstance(saved.get("time"), (int, float)):
             raise CheckpointError(f"{where}: the saved state is of a system with components {theirs}, this one has "
-                                  f"{own} (or its inputs do not fit)")
+                                  f"{own} (or its inputs or time do not fit)")
         for slave, part in zip(self._parts, states):
             slave.restore(part)
         self._latest, self._inputs, self.time = latest, inputs, saved.get("time")
