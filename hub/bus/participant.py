@@ -428,8 +428,10 @@ class _Link:
         try:
             request = wire.read_checkpoint(wire.unseal(self.key, payload))
         except wire.WireError as exc:
-            # Not the hub's (a stranger cannot seal), or junk: no tag to answer under.
-            _log.warning(f"planthub participant {self.name!r}: dropped a checkpoint message: {exc}")
+            # Not the hub's (a stranger cannot seal), or junk: no tag to answer under; logged once, as steps.
+            self.foreign += 1
+            if self.foreign == 1:
+                _log.warning(f"planthub participant {self.name!r}: dropped a checkpoint message: {exc}")
             return
         op, tag, step = request["op"], request["tag"], request["step"]
         try:
