@@ -50,6 +50,8 @@ class BeltDrive(Component):
         Slot.source("velocity", "real", "speed the field drives bottles to now, m/s"),
     )
 
+    STATE = ("speed", "running", "_applied", "_running", "_velocity")
+
     def __init__(self, obj, name, world, field, speed, running):
         super().__init__(obj, name)
         self.world = world

@@ -23,6 +23,8 @@ class Clock(Component):
         Slot.source("count", "int", "how many times it fired so far"),
     )
 
+    STATE = ("next", "count")
+
     def __init__(self, obj, name, tick_of, total):
         super().__init__(obj, name)
         self.tick_of = tick_of      # i → tick of the i-th time, computed from i (nothing accumulates)

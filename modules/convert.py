@@ -40,6 +40,7 @@ from __future__ import annotations
 import math
 from typing import Callable
 
+from hub.core import state
 from hub.core.component import Component
 from hub.core.errors import SimulationError
 from hub.core.module import Module
@@ -69,6 +70,8 @@ ROUNDING: dict[str, Callable[[float], int]] = {
 
 class Threshold:
     """real → bool with a hysteresis band below the threshold; remembers its state."""
+
+    STATE = ("state",)
 
     def __init__(self, threshold: float, hysteresis: float):
         self.on_above = threshold
@@ -135,6 +138,8 @@ def _rounding(rule: Callable[[float], int]) -> Callable:
 class Converter(Component):
     FEEDTHROUGH = (("in", "out"),)
 
+    STATE = ("tick", "convert")   # hub/core/state.py; `convert` keeps state only as a Threshold (save_state)
+
     def __init__(self, obj, name, slots, convert, start, real_input: bool, rate: int):
         super().__init__(obj, name)
         self.SLOTS = slots
@@ -147,6 +152,15 @@ class Converter(Component):
     def bind(self, signals, index, needed):
         super().bind(signals, index, needed)
         signals.values[index["out"]] = self.start
+
+    def save_state(self) -> dict:
+        threshold = self.convert if isinstance(self.convert, Threshold) else None
+        return {"tick": self.tick, "threshold": None if threshold is None else state.save(threshold)}
+
+    def restore_state(self, saved: dict) -> None:
+        self.tick = saved["tick"]
+        if saved["threshold"] is not None:
+            state.restore(self.convert, saved["threshold"], f"{self.obj}.{self.name}")
 
     def sense(self, tick):
         self.tick = tick   # react() gets no clock; its errors name the point they happened at

@@ -87,6 +87,8 @@ class Blocker:
     in the way. `push` is how deep a bottle may reach into the boxes and still be pushed out
     when they turn solid (0: the way must be clear by MARGIN)."""
 
+    STATE = ("target", "solid", "arrive", "waiting", "held_open", "reached")
+
     def __init__(self, world, centers, half_extents, yaws, solid: bool, travel_ticks: int, push: float = 0.0):
         self.world = world
         self.part = world.add_switchable_boxes(centers, half_extents, yaws, solid)
@@ -146,6 +148,8 @@ class Holders:
     separator gates), as one set of boxes, for the jam rule (modules/plant/jams.py): how close each bottle
     is to a closed one, in one numpy pass however many there are."""
 
+    STATE = ("_closed",)   # which parts were closed at the last look, and their boxes
+
     def __init__(self, blockers: list[Blocker]):
         self.blockers = blockers
         self.boxes = Boxes()
@@ -183,6 +187,8 @@ class TwoPositions(Component):
     #: Whether the part, closed, holds bottles back on purpose (a stopper, a separator's gates):
     #: bottles queued at it stand still without being jammed (modules/plant/jams.py). A switch blade guides.
     HOLDS: bool = False
+
+    STATE = ("_at", "blocker")
 
     def __init__(self, obj, name, blocker: Blocker):
         super().__init__(obj, name)

@@ -38,6 +38,8 @@ class Inspection(VolumeTrigger):
         Slot.source("checked", "string", "id of the bottle checked last"),
     )
 
+    STATE = VolumeTrigger.STATE + ("results",)
+
     def __init__(self, obj, name, world, trigger, requires: tuple[str, ...]):
         super().__init__(obj, name, world, trigger)
         self.requires = requires

@@ -2,16 +2,16 @@
 
 A bottle's body belongs to the physics world and its module; its cargo state is written by
 sources (id, destination), stations (filled, capped) and read by ID readers and sinks. It lives
-in one table per world, keyed by the world's body number, so that no module reaches into
-another's components and a bottle made by the `bottle` module has a default entry (its id, no
-destination, empty, open) without knowing about any of this.
+in one table per world (among the world's `tables`, saved with its state), keyed by the world's
+body number, so that no module reaches into another's components and a bottle made by the
+`bottle` module has a default entry (its id, no destination, empty, open) without knowing about
+any of this.
 """
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 
-_TABLES: "weakref.WeakKeyDictionary[object, dict[int, Cargo]]" = weakref.WeakKeyDictionary()
+_TABLE = "manifest"
 
 
 @dataclass
@@ -24,7 +24,7 @@ class Cargo:
 
 def cargo(world, body: int) -> Cargo:
     """The entry of body number `body`, made from its world label on first use."""
-    table = _TABLES.setdefault(world, {})
+    table = world.tables.setdefault(_TABLE, {})
     entry = table.get(body)
     if entry is None:
         entry = table[body] = Cargo(world.labels[body])
@@ -33,11 +33,11 @@ def cargo(world, body: int) -> Cargo:
 
 def peek(world, body: int) -> Cargo | None:
     """The entry of body number `body` if it has one, without making it (a view looks)."""
-    table = _TABLES.get(world)
+    table = world.tables.get(_TABLE)
     return None if table is None else table.get(body)
 
 
 def register(world, body: int, destination: str = "") -> Cargo:
     """Make a fresh entry for a body (a source does this for every bottle it makes)."""
-    entry = _TABLES.setdefault(world, {})[body] = Cargo(world.labels[body], destination)
+    entry = world.tables.setdefault(_TABLE, {})[body] = Cargo(world.labels[body], destination)
     return entry

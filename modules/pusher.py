@@ -62,6 +62,8 @@ class Push(Component):
         Slot.source("refused", "void", "a push came while a stroke was under way and was ignored"),
     )
 
+    STATE = ("travel", "seen", "refused_at", "reported")
+
     def __init__(self, obj, name, world, part, legs, stroke: float):
         super().__init__(obj, name)
         self.world = world

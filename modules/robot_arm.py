@@ -71,6 +71,8 @@ class Gripper(VolumeTrigger):
         Slot.source("position", "vec3", "the tool point, m"),
     )
 
+    STATE = VolumeTrigger.STATE + ("body", "changes", "reported")
+
     def __init__(self, obj, name, world, trigger, arm):
         super().__init__(obj, name, world, trigger)
         self.arm = arm
@@ -134,6 +136,11 @@ class Arm(Component):
         Slot.source("busy", "bool", "a sequence runs or waits"),
     )
     COMMANDS = ("pick", "carry", "place", "home")
+
+    # `poses` too: solved by pybullet's inverse kinematics at build, whose answer is not the same
+    # in two worlds of one process (measured: a plant built beside another differed), while a
+    # resumed run must move the arm as the one that saved it would have.
+    STATE = ("queue", "steps", "wait_until", "pose", "finished", "poses")
 
     def __init__(self, obj, name, world, arm, gripper: Gripper, poses: dict, timing: dict, auto_grip: bool):
         super().__init__(obj, name)

@@ -64,6 +64,8 @@ class Bin(Component):
     )
     EVENTS_WHEN = ("taken",)   # its rows are the bottles taken at this point
 
+    STATE = ("taken", "deliveries")
+
     def __init__(self, obj, name, world, trigger, counter, accepts: tuple[str, ...] | None, rejects: bool = False):
         super().__init__(obj, name)
         self.world = world
@@ -109,6 +111,8 @@ class Bin(Component):
 
 class Count(Component):
     """Slots `total`, one per listed destination, `other` and `misrouted`; set per instance."""
+
+    STATE = ("counts",)
 
     def __init__(self, obj, name, destinations):
         super().__init__(obj, name)

@@ -66,6 +66,8 @@ class Store(Component):
         Slot.source("waiting", "bool", "a release waits for the spot to clear"),
     )
 
+    STATE = ("due", "next", "pending", "out", "blocker")
+
     def __init__(self, obj, name, world, spot, bodies, destinations, clear, every, first):
         super().__init__(obj, name)
         self.world = world

@@ -51,6 +51,8 @@ class Process(Component):
         Slot.source("faulty", "void", "the bottle done was processed badly"),
     )
 
+    STATE = ("body", "since", "finished")
+
     def __init__(self, obj, name, world, trigger, field: str, ticks: int, still: float, faults: float = 0.0):
         super().__init__(obj, name)
         self.world = world

@@ -51,6 +51,8 @@ class VolumeTrigger(Component):
 
     EVENTS_WHEN = ("on_enter", "on_leave")   # its rows are the latch's entries and exits
 
+    STATE = ("latch",)
+
     def __init__(self, obj, name, world, trigger):
         super().__init__(obj, name)
         self.world = world

@@ -75,6 +75,17 @@ seconds_argument = number_type("expected a time in seconds, got {text}", "expect
                                math.isfinite)
 
 
+_positive_seconds = number_type("expected a time in seconds, got {text}", "needs a positive time in seconds, got {value}",
+                                lambda v: v > 0 and math.isfinite(v))
+
+
+def _times(text: str) -> tuple[float, ...]:
+    """`--checkpoint-at 10,20.5`: finite times in seconds, not negative."""
+    parse = number_type("expected times in seconds separated by commas, got {text}",
+                        "expected times of 0 s or later, got {text}", lambda v: v >= 0 and math.isfinite(v))
+    return tuple(parse(part.strip()) for part in text.split(","))
+
+
 def add_run_arguments(parser: argparse.ArgumentParser, out_help: str) -> None:
     """The scenario and everything about running it: output folder, overrides, pacing, replay, bus.
     `run` and `test` both take these, so a run judged in CI can be set up as any other."""
@@ -88,6 +99,14 @@ def add_run_arguments(parser: argparse.ArgumentParser, out_help: str) -> None:
     parser.add_argument("--record-bodies", action="store_true",
                         help="record every body's pose at every point for playback (`planthub view RUN_DIR`; "
                              "as run.record_bodies: true)")
+    saving = parser.add_argument_group("checkpoints (hub/run/checkpoint.py)")
+    saving.add_argument("--checkpoint-at", type=_times, metavar="T[,T…]", default=(),
+                        help="save the run's whole state at these times (s) to OUT/checkpoints/TICK.ckpt")
+    saving.add_argument("--checkpoint-every", type=_positive_seconds, metavar="S",
+                        help="save the run's whole state every S seconds to OUT/checkpoints/TICK.ckpt")
+    saving.add_argument("--resume", type=Path, metavar="FILE",
+                        help="continue from a checkpoint of this scenario to its end (--set may change the "
+                             "duration, the logic's parameters and where logic runs)")
     bus = parser.add_argument_group("bus (any of these opens it; they override the scenario's run.bus)")
     bus.add_argument("--bus", action="store_true", help="open the bus even if the scenario has no run.bus")
     bus.add_argument("--listen", action="append", metavar="ENDPOINT", help="listen on, e.g. tcp/0.0.0.0:7447")

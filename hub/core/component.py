@@ -18,6 +18,9 @@ class Component:
     """
 
     SLOTS: ClassVar[tuple[Slot, ...]] = ()
+    #: The attributes that change while the plant runs (hub/core/state.py): saved and put back
+    #: with a checkpoint; everything else a component holds is structure, fixed at build.
+    STATE: ClassVar[tuple[str, ...]] = ()
     #: (target, source) pairs where the target's value reaches the source within the same step.
     FEEDTHROUGH: ClassVar[tuple[tuple[str, str], ...]] = ()
     #: Its `sense` computes only the sources something reads: with none, the master skips it (a

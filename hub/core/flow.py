@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass
+from typing import ClassVar
 
 from hub.core.signals import Signals
 
@@ -31,6 +32,7 @@ class Flow:
     mode: Mode = Mode.CONTINUOUS
     rearm: int | None = None
     armed: bool = True
+    STATE: ClassVar[tuple[str, ...]] = ("armed",)   # hub/core/state.py
 
     def run(self, signals: Signals) -> bool:
         """Execute if armed and the condition holds; return whether it executed.

@@ -12,6 +12,10 @@ class Signals:
     clears it. `updated` marks a target that a flow wrote in this step.
     """
 
+    #: hub/core/state.py: the values, and the activity of the point the run is at (a Gauss-Seidel
+    #: step evaluates flows between two logic steps from it). The lists keep their identity.
+    STATE = ("values", "active", "updated")
+
     def __init__(self, slots: list[Slot]):
         self.slots = slots
         self.values = [s.type.initial() for s in slots]

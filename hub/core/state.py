@@ -44,8 +44,24 @@ class Stateful(Protocol):
     STATE: ClassVar[tuple[str, ...]]
 
 
+_VALUES: set[type] = set()
+
+
+def value(cls: type) -> type:
+    """Class decorator: instances of `cls` are plain values in a snapshot, saved and put back whole
+    (a robot's joint motion, a part's travel: made anew at each move, never changed in place)."""
+    _VALUES.add(cls)
+    return cls
+
+
 def is_stateful(obj) -> bool:
     return hasattr(type(obj), "STATE") or hasattr(obj, "save_state")
+
+
+def _is_part(obj) -> bool:
+    """Walked into and put back in place: a Stateful object that is not a value (one an owner
+    replaces, or holds only at times, is saved whole: a trigger's latch, a box set)."""
+    return type(obj) not in _VALUES and is_stateful(obj)
 
 
 def save(owner) -> Any:
@@ -72,25 +88,25 @@ def restore(owner, state, where: str = "") -> None:
 
 
 def _saved(value):
-    if is_stateful(value):
+    if _is_part(value):
         return save(value)
-    if isinstance(value, (list, tuple)) and value and all(is_stateful(v) for v in value):
+    if isinstance(value, (list, tuple)) and value and all(_is_part(v) for v in value):
         return [save(v) for v in value]
-    if isinstance(value, dict) and value and all(is_stateful(v) for v in value.values()):
+    if isinstance(value, dict) and value and all(_is_part(v) for v in value.values()):
         return {k: save(v) for k, v in value.items()}
     return value
 
 
 def _put(owner, name: str, saved, where: str) -> None:
     current = getattr(owner, name)
-    if is_stateful(current):
+    if _is_part(current):
         restore(current, saved, where)
-    elif isinstance(current, (list, tuple)) and current and all(is_stateful(v) for v in current):
+    elif isinstance(current, (list, tuple)) and current and all(_is_part(v) for v in current):
         if len(saved) != len(current):
             raise CheckpointError(f"{where}: the snapshot has {len(saved)} parts, this plant {len(current)}")
         for k, (part, state) in enumerate(zip(current, saved)):
             restore(part, state, f"{where}[{k}]")
-    elif isinstance(current, dict) and current and all(is_stateful(v) for v in current.values()):
+    elif isinstance(current, dict) and current and all(_is_part(v) for v in current.values()):
         if set(saved) != set(current):
             raise CheckpointError(f"{where}: the snapshot has parts {sorted(saved)}, this plant {sorted(current)}")
         for key, part in current.items():
@@ -149,7 +165,7 @@ class _Unpickler(pickle.Unpickler):
         if (module, name) in _ALLOWED or module.startswith(_ALLOWED_MODULES):
             found = super().find_class(module, name)
             if module.startswith(_ALLOWED_MODULES) and not (isinstance(found, type) and (
-                    issubclass(found, enum.Enum) or hasattr(found, "__dataclass_fields__")
+                    found in _VALUES or issubclass(found, enum.Enum) or hasattr(found, "__dataclass_fields__")
                     or issubclass(found, tuple))):
                 raise pickle.UnpicklingError(f"{module}.{name} is not plain data")
             return found

@@ -27,6 +27,9 @@ class LogicComponent(Component):
     `on_bad_value: hold`, keeps the slot's last good value and logs each occurrence.
     """
 
+    #: hub/core/state.py; save_state adds the slave's own state (hub.core.slave).
+    STATE = ("latest", "ready_at", "bad_values")
+
     def __init__(self, obj, name, slots, slave, inputs, outputs, rate: int, every: int | None,
                  on_bad_value: str = "stop", starts: dict | None = None):
         super().__init__(obj, name)
@@ -119,6 +122,14 @@ class LogicComponent(Component):
         self._fetch(tick)
         self.sense(tick)
         return True
+
+    def save_state(self) -> dict:
+        return {"fields": {name: getattr(self, name) for name in self.STATE}, "slave": self.slave.save()}
+
+    def restore_state(self, saved: dict) -> None:
+        self.slave.restore(saved["slave"])
+        for name, value in saved["fields"].items():
+            setattr(self, name, value)
 
     def close(self):
         self.slave.close()

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from hub.core import state
+from hub.core.errors import CheckpointError
 from hub.physics.robot import KinematicArm
 
 
@@ -10,8 +12,11 @@ class Arms:
     """Robot arms (robot.py) in the world, the body each one grips (the paper's gripping
     component) and the volume triggers that move with a tool (the paper's gripper trigger)."""
 
-    def __init__(self, client: int, bodies, bottles, rest, sleep, triggers):
-        self._client = client
+    #: hub/core/state.py: what each arm does and grips (save_state names arms by their place).
+    STATE = ("arms", "held")
+
+    def __init__(self, engine, bodies, bottles, rest, sleep, triggers):
+        self._engine = engine
         self.bodies = bodies
         self.bottles = bottles
         self.rest = rest
@@ -22,7 +27,7 @@ class Arms:
         self._following: list[tuple[int, KinematicArm, np.ndarray]] = []   # (trigger, arm, offset)
 
     def add(self, base, yaw: float, tool_length: float) -> KinematicArm:
-        arm = KinematicArm(self._client, base, yaw, tool_length)
+        arm = KinematicArm(self._engine, base, yaw, tool_length)
         self.arms.append(arm)
         return arm
 
@@ -44,6 +49,17 @@ class Arms:
     def release(self, arm: KinematicArm) -> None:
         self.held.pop(arm, None)
         arm.let_go()
+
+    def save_state(self) -> dict:
+        return {"arms": [state.save(arm) for arm in self.arms],
+                "held": [(self.arms.index(arm), body) for arm, body in self.held.items()]}
+
+    def restore_state(self, saved: dict) -> None:
+        if len(saved["arms"]) != len(self.arms):
+            raise CheckpointError(f"the snapshot has {len(saved['arms'])} robot arms, this plant {len(self.arms)}")
+        for k, (arm, arm_state) in enumerate(zip(self.arms, saved["arms"])):
+            state.restore(arm, arm_state, f"world.robots.arms[{k}]")
+        self.held = {self.arms[k]: body for k, body in saved["held"]}
 
     def held_rows(self) -> list[int]:
         return list(self.held.values())

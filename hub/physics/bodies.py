@@ -24,6 +24,11 @@ class Bodies:
     either: the hub moves its row itself.
     """
 
+    #: What changes as the world runs (hub/core/state.py); the properties and ids are structure.
+    STATE = ("positions", "orientations", "velocities", "angular_velocities", "parked", "started", "full_read",
+             "stale", "live_rows", "live_ids", "play_rows", "_in_play", "moved_rows", "free", "under", "fresh",
+             "fresh_rows", "placed", "_state")
+
     def __init__(self, client: int, rest):
         self._client = client
         self._rest = rest

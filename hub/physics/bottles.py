@@ -19,6 +19,8 @@ class Bottles:
     belts' forces to them where each is gripped: at its centre of mass, at its base point, or
     on the paper's second body at its base (`grip_at`)."""
 
+    STATE = ("_grips",)   # hub/core/state.py: the grip table, made at the first drive
+
     def __init__(self, engine, bodies, rest, transport):
         self.engine = engine
         self.bodies = bodies

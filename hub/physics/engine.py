@@ -1,13 +1,21 @@
 """The engine: one headless pybullet client, how it is set up, and the static geometry (floors, rails) in it."""
 from __future__ import annotations
 
+import os
+import tempfile
+
 import numpy as np
 
+from hub.core.errors import CheckpointError
 from hub.physics import supports
 from hub.physics._quiet import quiet_stderr
 
 with quiet_stderr():
     import pybullet
+
+
+#: pybullet's collision filter group and mask of a dynamic body, as it makes one.
+DYNAMIC = (1, -1)
 
 
 class Engine:
@@ -33,6 +41,12 @@ class Engine:
         # world's box and the placement check at load read them (watch.py, placement.py).
         self.static: list[tuple[int, tuple, tuple, float]] = []
         self.floors: set[int] = set()   # the bodies of the merged floors among them
+        # What the hub set on bodies that the engine's own saved state does not hold
+        # (save_state): each (body, link)'s collision filter, whether a body was put to sleep
+        # or woken last, each joint motor's target velocity and force.
+        self.filters: dict[tuple[int, int], tuple[int, int]] = {}
+        self.asleep: dict[int, bool] = {}
+        self.motors: dict[tuple[int, int], tuple[float, float]] = {}
 
     @property
     def solver_iterations(self) -> int:
@@ -111,13 +125,26 @@ class Engine:
             lateralFriction=0.0, spinningFriction=0.0, rollingFriction=0.0, restitution=0.0,
         )
 
+    def set_filter(self, body: int, link: int, group: int, mask: int) -> None:
+        """A body's (or link's) collision filter group and mask: (0, 0) takes it out of every pair."""
+        self.call(pybullet.setCollisionFilterGroupMask, body, link, group, mask)
+        self.filters[body, link] = (group, mask)
+
+    def set_motor(self, body: int, joint: int, velocity: float, force: float) -> None:
+        """A joint's velocity motor: its target velocity and the most force it may use."""
+        self.call(pybullet.setJointMotorControl2, body, joint, pybullet.VELOCITY_CONTROL, targetVelocity=velocity,
+                  force=force)
+        self.motors[body, joint] = (velocity, force)
+
     def sleep(self, body: int) -> None:
         """Leave a body asleep: the engine stops integrating it until something awake joins its island."""
+        self.asleep[body] = True
         self.call(pybullet.changeDynamics, body, -1, activationState=pybullet.ACTIVATION_STATE_ENABLE_SLEEPING)
         self.call(pybullet.changeDynamics, body, -1, activationState=pybullet.ACTIVATION_STATE_SLEEP)
 
     def wake(self, body: int) -> None:
         """Wake a body and keep Bullet's own sleeping rule off it (it would stop a bottle riding a belt)."""
+        self.asleep[body] = False
         self.call(pybullet.changeDynamics, body, -1, activationState=pybullet.ACTIVATION_STATE_WAKE_UP)
         self.call(pybullet.changeDynamics, body, -1, activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING)
 
@@ -130,19 +157,71 @@ class Engine:
         no pair, contact or island for it (a resting, parked or free bottle). With the
         ~50 resting bottles of the bottling plant's busiest window out, the engine's part of the
         hub's tick fell from 1662 to 1150 µs (README, *The bottling plant*)."""
-        self.call(pybullet.setCollisionFilterGroupMask, body, -1, 0, 0)
+        self.set_filter(body, -1, 0, 0)
         self.sleep(body)
 
     def rejoin(self, body: int) -> None:
         """Put a body that left back into the collision world, awake (pybullet's group and mask for a dynamic body)."""
-        self.call(pybullet.setCollisionFilterGroupMask, body, -1, 1, -1)
+        self.set_filter(body, -1, *DYNAMIC)
         self.wake(body)
 
     def aabb(self, body: int, link: int = -1) -> tuple[tuple, tuple]:
         """The box (lo, hi) the engine bounds a body (or one of its links) by, without its pair-search widening."""
         return self.call(pybullet.getAABB, body, link)
 
+    # --- state (hub/core/state.py) ----------------------------------------------------------
+    STATE = ("filters", "asleep", "motors")
+
+    def save_state(self) -> dict:
+        """The engine's whole dynamic state: its own (bodies' poses and velocities, joint states,
+        contact points with their cached impulses, as pybullet's saveBullet writes them) and the
+        settings the hub made that it does not hold."""
+        return {"bullet": self._bullet(), "filters": dict(self.filters), "asleep": dict(self.asleep),
+                "motors": dict(self.motors)}
+
+    def restore_state(self, saved: dict) -> None:
+        """Put back an engine state saved from a world of the same build: the hub's settings
+        first (a filter change drops a body's contact points), then the engine's own with pybullet's
+        restoreState, which a freshly built world continues from exactly as the saved one
+        would have (tests/test_checkpoint.py)."""
+        for key in sorted(set(self.filters) | set(saved["filters"])):
+            want = saved["filters"].get(key, DYNAMIC)   # set only after the save: it was a dynamic body's own
+            if self.filters.get(key, DYNAMIC) != want:
+                self.set_filter(*key, *want)
+        for body in sorted(set(self.asleep) | set(saved["asleep"])):
+            want = saved["asleep"].get(body, False)
+            if self.asleep.get(body) != want:
+                (self.sleep if want else self.wake)(body)
+        for key, (velocity, force) in sorted(saved["motors"].items()):
+            if self.motors.get(key) != (velocity, force):
+                self.set_motor(*key, velocity, force)
+        self.filters, self.asleep, self.motors = (dict(saved[k]) for k in ("filters", "asleep", "motors"))
+        fd, path = tempfile.mkstemp(suffix=".bullet", dir=_SCRATCH)
+        try:
+            with os.fdopen(fd, "wb") as out:
+                out.write(saved["bullet"])
+            self.call(pybullet.restoreState, fileName=path)
+        except pybullet.error as exc:
+            raise CheckpointError(f"the engine's saved state does not fit this world: {exc}") from None
+        finally:
+            os.unlink(path)
+
+    def _bullet(self) -> bytes:
+        """pybullet's saveBullet, which writes only to a file: a scratch file in memory where there is one."""
+        fd, path = tempfile.mkstemp(suffix=".bullet", dir=_SCRATCH)
+        os.close(fd)
+        try:
+            self.call(pybullet.saveBullet, path)
+            with open(path, "rb") as saved:
+                return saved.read()
+        finally:
+            os.unlink(path)
+
     def close(self) -> None:
         if self.client is not None:
             pybullet.disconnect(physicsClientId=self.client)
             self.client = None
+
+
+#: Where the engine's state passes through a file: memory-backed where the system has it.
+_SCRATCH = "/dev/shm" if os.path.isdir("/dev/shm") and os.access("/dev/shm", os.W_OK) else None

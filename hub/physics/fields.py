@@ -63,6 +63,8 @@ class ForceFields:
     chained end to start hand a body over at one exact point.
     """
 
+    STATE = ("speeds", "_table")   # hub/core/state.py: a belt's speed is all that changes while it runs
+
     def __init__(self, dt: float, integrator: str = "exact"):
         if integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {', '.join(INTEGRATORS)}, not {integrator!r}")

@@ -6,11 +6,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hub.core import state
+
 TAU = 2.0 * math.pi
 
 
+@state.value   # also a plain value inside a cache (modules/gate.py Holders)
 class Boxes:
     """A growing set of boxes, each with a centre, half extents and a yaw about the vertical axis."""
+
+    STATE = ("centers", "half_extents", "cos", "sin")   # a trigger's box follows a tool (hub/core/state.py)
 
     def __init__(self):
         self.centers = np.zeros((0, 3))

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hub.core import state
 from hub.physics._quiet import quiet_stderr
 from hub.physics.rest import BREAKING, SHAPE_MARGIN
 
@@ -52,6 +53,7 @@ class Leg:
     hold: float = 0.0
 
 
+@state.value
 class Travel:
     """A part's offset as a function of the integer tick: its legs one after the other from
     `start`, each at constant speed over a whole number of ticks (the last tick of a leg moves
@@ -89,6 +91,8 @@ class MovingPart:
     """One part: its boxes, given in the world frame where it stands at offset 0, on a link that
     slides along the unit vector `axis`."""
 
+    STATE = ("offset", "velocity", "travel")   # hub/core/state.py; the joint is the engine's
+
     def __init__(self, engine, rate: int, centers, half_extents, yaws, axis):
         self.engine = engine
         self.rate = rate
@@ -108,7 +112,7 @@ class MovingPart:
                          linkJointTypes=[pybullet.JOINT_PRISMATIC], linkJointAxis=[self.axis.tolist()])
         engine.frictionless(self.body, 0)
         call(pybullet.setCollisionFilterGroupMask, self.body, 0, GROUP, MASK)
-        call(pybullet.setJointMotorControl2, self.body, 0, pybullet.VELOCITY_CONTROL, targetVelocity=0.0, force=FORCE)
+        engine.set_motor(self.body, 0, 0.0, FORCE)
         engine.sleep(self.body)
         lo, hi = (np.asarray(v, float) for v in engine.aabb(self.body, 0))
         self._centre, self._half = (lo + hi) / 2.0, (hi - lo) / 2.0
@@ -146,8 +150,7 @@ class MovingPart:
         call = self.engine.call
         call(pybullet.resetJointState, self.body, 0, offset, velocity)
         if velocity != self.velocity:
-            call(pybullet.setJointMotorControl2, self.body, 0, pybullet.VELOCITY_CONTROL,
-                 targetVelocity=velocity, force=FORCE)
+            self.engine.set_motor(self.body, 0, velocity, FORCE)
         self.offset, self.velocity = offset, velocity
         if done:
             self.travel = None
@@ -161,6 +164,8 @@ class MovingPart:
 
 class MovingParts:
     """The world's moving parts, and the ones under way: waking what they come near, before each tick."""
+
+    STATE = ("parts",)
 
     def __init__(self, engine, rate: int, sleep):
         self.engine = engine

@@ -12,6 +12,8 @@ with quiet_stderr():
 class SwitchableParts:
     """The world's switchable parts, numbered in the order they were made."""
 
+    STATE = ("solid",)   # hub/core/state.py; the engine keeps each body's filter (Engine.filters)
+
     def __init__(self, engine, sleep):
         self.engine = engine
         self.sleep = sleep
@@ -64,4 +66,4 @@ class SwitchableParts:
             self.sleep.wake_in([(lo + hi) / 2.0], [(hi - lo) / 2.0])
         self.solid[part] = solid
         group, mask = (2, -3) if solid else (0, 0)
-        self.engine.call(pybullet.setCollisionFilterGroupMask, self._bodies[part], -1, group, mask)
+        self.engine.set_filter(self._bodies[part], -1, group, mask)

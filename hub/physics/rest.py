@@ -113,6 +113,8 @@ class Rest:
     The methods take the world's state arrays (positions, orientations, velocities, spins) as
     they are after the last read; a resting body's entries stand while it rests."""
 
+    STATE = ("still", "resting", "extents", "fields", "_at_rest")   # hub/core/state.py
+
     def __init__(self, rate: int, after: float = 0.05, speed: float = 0.005, spin: float = 0.05):
         self.ticks = max(1, round(after * rate)) if after > 0 else 0   # 0: nothing ever rests
         self.held_ticks = max(self.ticks, round(HELD_AFTER * rate))     # still this long when held on a running belt

@@ -5,7 +5,9 @@ import math
 
 import numpy as np
 
+from hub.core import state
 from hub.physics._quiet import quiet_stderr
+from hub.physics.engine import DYNAMIC
 
 with quiet_stderr():
     import pybullet
@@ -35,6 +37,7 @@ def smooth(s: np.ndarray | float):
     return s2 * s * (10.0 - 15.0 * s + 6.0 * s2), 30.0 * s2 * (1.0 - s) ** 2
 
 
+@state.value
 class JointMotion:
     """A straight line in joint space from `q0` to `q1`, over `ticks` ticks from `start` (exclusive)."""
 
@@ -69,8 +72,11 @@ class KinematicArm:
     another process, and compares the bytes).
     """
 
-    def __init__(self, client: int, base, yaw: float, tool_length: float):
-        self._client = client
+    STATE = ("motion", "held", "q", "tool_position", "tool_velocity")   # hub/core/state.py
+
+    def __init__(self, engine, base, yaw: float, tool_length: float):
+        self._engine = engine
+        self._client = engine.client
         self.base = np.asarray(base, float)
         self.yaw = yaw
         self.tool_length = tool_length
@@ -180,7 +186,7 @@ class KinematicArm:
     # --- gripping -------------------------------------------------------------------------
     def hold(self, body: int, position, orientation) -> None:
         """Take a body (pybullet id) out of the dynamics and keep it where it is relative to the tool."""
-        self._call(pybullet.setCollisionFilterGroupMask, body, -1, 0, 0)
+        self._engine.set_filter(body, -1, 0, 0)
         self.held = (body, np.asarray(position, float) - self.tool_position, tuple(orientation))
 
     def let_go(self) -> int | None:
@@ -190,5 +196,5 @@ class KinematicArm:
         body = self.held[0]
         self.held = None
         self._call(pybullet.resetBaseVelocity, body, self.tool_velocity.tolist(), (0.0, 0.0, 0.0))
-        self._call(pybullet.setCollisionFilterGroupMask, body, -1, 1, -1)   # pybullet's default for a dynamic body
+        self._engine.set_filter(body, -1, *DYNAMIC)
         return body

@@ -91,6 +91,11 @@ NEAR = 32             # boxes a bottle's list holds; one with more within LIST s
 class FreeTransport:
     """The free set of a world's bodies and the tests that take bottles out of and back into the engine."""
 
+    #: hub/core/state.py: which bottles ride free and what their looks found; the laws and limits are structure.
+    STATE = ("free", "listed_at", "near", "near_count", "rows", "pulls", "most", "due", "clear", "_everything",
+             "next_try", "entered", "left", "started", "stopped", "offsets", "_parts_at_rest", "_trains_seen",
+             "_slides_seen", "_checked")
+
     def __init__(self, engine, bodies, fields, rest, dt: float):
         self.engine = engine
         self.bodies = bodies

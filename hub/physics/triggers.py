@@ -6,12 +6,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from hub.core import state
 from hub.physics.frames import Boxes
 
 
+@state.value   # taken and replaced at each point: saved whole
 @dataclass
 class Latch:
     """What one trigger saw since it was last taken: (tick, body) enters and leaves, in order."""
+
+    STATE = ("entered", "left", "stayed", "inside")   # hub/core/state.py
 
     entered: list[tuple[int, int]] = field(default_factory=list)
     left: list[tuple[int, int]] = field(default_factory=list)
@@ -27,6 +31,8 @@ class VolumeTriggers:
     must overlap. Each evaluation compares with the previous tick, so an object that enters
     and leaves between two communication points still produces both events.
     """
+
+    STATE = ("boxes", "latches", "_inside", "_stayed", "_occupants", "shifted")   # boxes move with an arm's tool
 
     def __init__(self):
         self.boxes = Boxes()

@@ -30,6 +30,9 @@ class Watch:
     FACTOR = 4.0
     MIN_BELT = 1.0   # m/s: a scene whose belts all stand still at the start may start them
 
+    #: hub/core/state.py: the bound follows the belts' speeds; the box is fixed when the world starts.
+    STATE = ("enabled", "lo", "hi", "_fall", "bound", "_bound2", "removed", "_scale", "_shift")
+
     def __init__(self, gravity: float, max_speed: float | None = None, policy: str = "stop"):
         if policy not in POLICIES:
             raise ValueError(f"watch policy {policy!r}: one of {', '.join(POLICIES)}")

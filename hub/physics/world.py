@@ -90,6 +90,12 @@ class PhysicsWorld:
     MAXIMAL = True
     SOLVER_ITERATIONS = 20
 
+    #: Everything of the world that changes as it runs (hub/core/state.py): the clock, the engine's
+    #: own state, and each part's tables. Sleep and parking keep nothing of their own; the scene
+    #: log, the static geometry and the fields' regions are structure.
+    STATE = ("tick", "engine", "bodies", "bottles", "fields", "triggers", "rest", "transport", "parts", "moving",
+             "robots", "watch", "tables")
+
     def __init__(self, rate: int, gravity: float = -9.81, solver_iterations: int | None = None,
                  sleep_after: float = 0.05, integrator: str = "exact"):
         self.rate = rate
@@ -112,10 +118,13 @@ class PhysicsWorld:
         self.parts = SwitchableParts(self.engine, self.sleep)
         self.moving = MovingParts(self.engine, rate, self.sleep)
         self.parking = Parking(self.engine, self.bodies, self.bottles, self.rest, self.sleep)
-        self.robots = Arms(self._client, self.bodies, self.bottles, self.rest, self.sleep, self.triggers)
+        self.robots = Arms(self.engine, self.bodies, self.bottles, self.rest, self.sleep, self.triggers)
         self.watch = Watch(self.gravity)        # off until configured; hub/run/plant.py does, from run.watch
         self.warnings: list[str] = []           # what the checks at the start found doubtful (logged too)
         self.scene = SceneLog()                 # what was built, by whom, as a view draws it (scene.py)
+        #: Tables the modules keep per world beside the bodies (the manifest's cargo, by body row):
+        #: plain data, saved and put back with the world.
+        self.tables: dict[str, dict] = {}
 
     # --- the body table, as the modules read it ---------------------------------------------
     @property

@@ -9,6 +9,8 @@ from hub.core.observer import Observer, StopCondition
 from hub.core.registry import load_entry
 from hub.logic.watchdog import WATCHDOG
 from hub.run.bus_link import BusLink
+from hub.run.checkpoint import Checkpointer
+from hub.run.checkpoint import apply as put_back
 from hub.run.interruption import Interruption
 from hub.run.ending import ending
 from hub.run.hold import Hold
@@ -17,6 +19,7 @@ from hub.run.plant import Plant
 from hub.run.recorder import Recorder
 from hub.run.summary import RunSummary, logic_components
 from hub.scenario.checker import Scenario
+from hub.scenario.expectations import Expectation, Watcher
 
 
 class Run:
@@ -41,16 +44,23 @@ class Run:
       CLI's runs), their status in `interruption.exit_status`.
     - `log`: a function for notices (a participant lost, where the bus listens); default: the
       `hub.run` logger at INFO (the CLI shows them unless `-q`).
+    - `resume`: a checkpoint's bytes (hub/run/checkpoint.py) and where they came from: `start`
+      puts the run at its communication point, and the run goes on from there.
+    - `checkpoints`: (ticks, every) — save the run at those ticks and every `every` ticks into
+      `out/checkpoints/TICK.ckpt`.
     """
 
     def __init__(self, scenario: Scenario, *, out: Path | None = None, bus=None, replay=None, pacer=None,
                  every_source: bool = False, observers: list[Observer] = (), stops: list[StopCondition] = (),
-                 log=None, signals: bool = False):
+                 log=None, signals: bool = False, resume: tuple[bytes, str] | None = None,
+                 checkpoints: tuple = ((), None)):
         self.scenario = scenario
         self.out = Path(out) if out is not None else None
         self.log = log or logging.getLogger(__name__).info
         self.link = None
         self.failure = None       # what ended the run with an error (the `with` block's exception)
+        self.resume = resume
+        self.resumed = None       # the checkpoint's header once it is put back (hub/run/checkpoint.py)
         self.wall_seconds = 0.0   # spent in run (and in Simulation.run_until)
         self._started = self._closed = False
         self.plant = Plant(scenario, every_source=every_source)
@@ -78,7 +88,18 @@ class Run:
             if bus is not None or slaves:
                 self.link = BusLink(plant, self.recorder, slaves, bus, commands, log=self.log,
                                     looks=self.contributed, figures=lambda: self.figures)
-            watchers = [*self.contributed, *observers]
+            # The scenario's expectations are watched in every run, so that a checkpoint carries
+            # what they saw whichever command took it and whichever resumes it.
+            self.watcher = Watcher([e for e in scenario.expect if isinstance(e, Expectation)], plant.index, rate)
+            watchers = [*self.contributed, self.watcher, *observers]
+            ticks, every = checkpoints
+            self.checkpointer = None
+            if ticks or every:
+                if self.out is None:
+                    raise SimulationError("checkpoints are written into the run's folder: give it one (--out)")
+                # Last of the observers: a checkpoint holds what every other one made of its point.
+                self.checkpointer = Checkpointer(self, self.out / "checkpoints", ticks, every, log=self.log)
+                watchers.append(self.checkpointer)
             self.master = Master(
                 plant,
                 observers=[self.recorder, *([self.bodies] if self.bodies else []), *([self.link] if self.link else []),
@@ -106,6 +127,9 @@ class Run:
                                             idle=self.link.idle)
             if self.commands is not None:   # an operator's stop, live or replayed
                 self.master.stops.append(self.commands)
+            if self.resume is not None:   # participants are on the bus by now: their state goes to them
+                data, where = self.resume
+                self.resumed = put_back(self, data, where)
         except BaseException:
             self.master.close("the run failed")
             raise

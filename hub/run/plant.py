@@ -15,6 +15,9 @@ from hub.core.slots import Direction, SlotRef
 class Plant:
     """Everything one run needs, built in a fixed order so that two builds are identical."""
 
+    #: hub/core/state.py: the world, the slots' values, the flows' arming and every component's own.
+    STATE = ("world", "signals", "flows", "components")
+
     def __init__(self, scenario: Scenario, every_source: bool = False):
         self.scenario = scenario
         self.world = PhysicsWorld(scenario.run.physics_rate, sleep_after=scenario.run.sleep_after,

@@ -4,6 +4,7 @@ from __future__ import annotations
 import csv
 import time
 from dataclasses import dataclass, field
+from typing import ClassVar
 from pathlib import Path
 
 from hub.core.signals import Signals
@@ -28,7 +29,7 @@ def _cell(kind: SlotType, value, fired: bool):
 
 
 @dataclass
-class EventStats:
+class EventStats:   # a plain value in a snapshot (hub/core/state.py)
     count: int = 0
     first_tick: int | None = None
     first_detail: str = ""
@@ -54,6 +55,8 @@ class Recorder:
     rate: int
     directory: Path | None = None
     stats: dict[str, EventStats] = field(default_factory=dict)
+    #: hub/core/state.py: what the summary counts; the files of a resumed run start at its resume point.
+    STATE: ClassVar[tuple[str, ...]] = ("stats",)
 
     def __post_init__(self):
         self._files = []

@@ -12,7 +12,7 @@ from hub.run.assembly import Run
 from hub.run.master import RunResult
 from hub.run.summary import RunSummary
 from hub.scenario.checker import load_scenario
-from hub.scenario.expectations import Expectation, NoJam, Outcome, Watcher, interrupted
+from hub.scenario.expectations import NoJam, Outcome, interrupted
 
 
 class Simulation:
@@ -42,18 +42,16 @@ class Simulation:
         self.scenario = load_scenario(scenario, changes)
         self.out = out
         self.events: list[tuple[float, str, str]] = []   # the event log: (time, slot, detail)
-        slots = [e for e in self.scenario.expect if isinstance(e, Expectation)]
-        self.watcher = None
         self._run = Run(self.scenario, out=out, every_source=True, observers=[_EventLog(self)], **run_options)
+        self.watcher = self._run.watcher
         try:
             self.plant = self._run.plant
             self.master = self._run.master
-            self.watcher = Watcher(slots, self.plant.index, self.scenario.run.physics_rate)
-            self.master.observers.append(self.watcher)
             if on_emergency is not None and self.interruption is not None:
                 self.interruption.reporters.append(lambda reason: on_emergency(self, reason))
-            self._run.start()   # participants on the bus are launched and awaited here
-            self.master.communicate()
+            self._run.start()   # participants on the bus are launched and awaited here (and a checkpoint put back)
+            if not self.master.communicated:
+                self.master.communicate()
         except BaseException:
             self._run.close("the run failed")
             raise

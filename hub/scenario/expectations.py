@@ -1,6 +1,8 @@
 """Expectations of a scenario (`expect:`), watched at every communication point and judged after the run."""
 from __future__ import annotations
 
+from typing import ClassVar
+
 import operator
 from dataclasses import dataclass, field
 
@@ -118,6 +120,7 @@ class Watcher:
     failures: dict[int, list[str]] = field(default_factory=dict)
     seen: dict[int, object] = field(default_factory=dict)
     judged: dict[int, int] = field(default_factory=dict)   # points an `always` was judged at
+    STATE: ClassVar[tuple[str, ...]] = ("judged", "seen", "failures")   # hub/core/state.py: what it saw so far
 
     def read(self, signals, ref: SlotRef, kind: SlotType):
         i = self.index[ref]

@@ -47,6 +47,8 @@ class JamWatch:
     equal runs see equal jams.
     """
 
+    STATE = ("due", "spot", "since", "open", "found")
+
     def __init__(self, world, belts: dict[int, str], holders, after: float):
         self.world = world
         self.belts = belts                 # force field → belt name

@@ -184,6 +184,8 @@ class PlantTally:
     jam watch (modules/plant/jams.py), which looks every few ticks.
     """
 
+    STATE = ("looks", "watch")
+
     def __init__(self, plant):
         world = self.world = plant.world
         comps = plant.components

@@ -1,0 +1,201 @@
+"""Checkpoints: a running plant's whole state at a communication point, as bytes and as a file, and put back into a run of the same scenario.
+
+A checkpoint is taken right after a communication point (the master's `communicate`): the world
+at that tick, every slot's value and the point's activity, every flow's arming, every
+component's own state and its logic's (FMUs through FMI's FMU-state calls, participants
+through the bus's save message), the observers whose figures depend on the past (the event
+counts, the plant's tally, the expectations' watcher) and the master's own flags. A run that
+puts it back continues with the physics and logic steps that follow that point, and gives, bit
+for bit, the rows and events the run that saved it gave after it (tests/test_checkpoint.py).
+Its own recording starts after the point.
+
+The file: a first line `planthub checkpoint`, a JSON header line (format, tick, rate, the
+scenario's name and fingerprint, the payload's size and SHA-256), then the payload
+(hub/core/state.py `dumps`). It is written to a temporary file beside its place and renamed, so
+a reader never sees half of one.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from hub.core import state
+from hub.core.errors import CheckpointError
+
+FORMAT = 1
+MAGIC = b"planthub checkpoint\n"
+#: Object parameters that may differ between the run that saved and the one that resumes: where
+#: logic runs (in the hub, in a child process, over the bus) changes no result.
+_WHERE_LOGIC_RUNS = ("in_process", "isolate", "participant")
+
+
+@dataclass(frozen=True)
+class Header:
+    format: int
+    tick: int
+    rate: int
+    scenario: str
+    fingerprint: str
+    size: int
+    sha256: str
+
+    @property
+    def time(self) -> float:
+        return self.tick / self.rate
+
+
+def fingerprint(scenario) -> str:
+    """What a snapshot must fit: the scenario's plant (objects, their parameters, flows) and the
+    run settings that shape its state. Its duration, its expectations, its recording and where its
+    logic runs may differ (`planthub run --resume … --set run.duration=…`), and so may the
+    parameters of its logic, which its saved state overrides."""
+    run = scenario.run
+    objects = []
+    for spec in scenario.objects:
+        params = {k: v for k, v in spec.params.items() if k not in _WHERE_LOGIC_RUNS and k != "parameters"}
+        logic = None if spec.logic is None else {k: v for k, v in spec.logic.items()
+                                                 if k not in _WHERE_LOGIC_RUNS and k != "parameters"}
+        objects.append([spec.name, spec.module_name, params, logic])
+    flows = [[str(f.source), str(f.target), f.condition.value, f.mode.value, str(f.rearm)] for f in scenario.flows]
+    shape = {"rate": run.physics_rate, "substeps": run.substeps, "seed": run.seed, "event_driven": run.event_driven,
+             "master": run.master, "sleep_after": run.sleep_after, "max_speed": run.max_speed,
+             "on_violation": run.on_violation, "solver_iterations": run.solver_iterations,
+             "integrator": run.integrator, "jam_after": run.jam_after, "objects": objects, "flows": flows}
+    text = json.dumps(shape, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _observers(run) -> dict[str, object]:
+    """The run's observers and stop conditions that keep state, by class and occurrence."""
+    seen, out = set(), {}
+    for part in (*run.master.observers, *run.master.stops, *run.contributed):
+        if id(part) in seen or not state.is_stateful(part):
+            continue
+        seen.add(id(part))
+        name = f"{type(part).__module__}.{type(part).__qualname__}"
+        key, n = name, 1
+        while key in out:
+            n += 1
+            key = f"{name}#{n}"
+        out[key] = part
+    return out
+
+
+def capture(run) -> bytes:
+    """The run's whole state now, at the communication point it is at, as a checkpoint's bytes."""
+    master = run.master
+    if not master.communicated:
+        raise CheckpointError("a checkpoint is taken at a communication point; the run has not reached its first")
+    whole = {"plant": state.save(run.plant),
+             "master": {"answering": master._answering},
+             "observers": {key: state.save(part) for key, part in _observers(run).items()}}
+    payload = state.dumps(whole)
+    scenario = run.scenario
+    header = {"format": FORMAT, "tick": master.tick, "rate": scenario.run.physics_rate, "scenario": scenario.name,
+              "fingerprint": fingerprint(scenario), "size": len(payload),
+              "sha256": hashlib.sha256(payload).hexdigest()}
+    return MAGIC + json.dumps(header, sort_keys=True).encode() + b"\n" + payload
+
+
+def header(data: bytes, where: str) -> tuple[Header, bytes]:
+    """The header and payload of a checkpoint's bytes, checked whole; a CheckpointError naming
+    `where` (the file) and the cause otherwise."""
+    if not data.startswith(MAGIC):
+        raise CheckpointError(f"{where}: not a planthub checkpoint (it does not start with {MAGIC.strip().decode()!r})")
+    end = data.find(b"\n", len(MAGIC))
+    if end < 0:
+        raise CheckpointError(f"{where}: truncated: the header line has no end")
+    try:
+        fields = json.loads(data[len(MAGIC):end])
+        head = Header(**{name: fields[name] for name in Header.__dataclass_fields__})
+    except (ValueError, KeyError, TypeError) as exc:
+        raise CheckpointError(f"{where}: its header cannot be read ({type(exc).__name__}: {exc})") from None
+    if head.format != FORMAT:
+        raise CheckpointError(f"{where}: checkpoint format {head.format!r}; this planthub reads format {FORMAT}")
+    payload = data[end + 1:]
+    if len(payload) != head.size:
+        raise CheckpointError(f"{where}: truncated or padded: its header promises {head.size} bytes of state, "
+                              f"the file holds {len(payload)}")
+    if hashlib.sha256(payload).hexdigest() != head.sha256:
+        raise CheckpointError(f"{where}: corrupt: its state does not match the checksum in its header")
+    return head, payload
+
+
+def apply(run, data: bytes, where: str) -> Header:
+    """Put a checkpoint into `run`, a run of the same scenario built and not yet started: it then
+    continues from the checkpoint's communication point."""
+    head, payload = header(data, where)
+    scenario = run.scenario
+    if head.fingerprint != fingerprint(scenario):
+        raise CheckpointError(f"{where}: taken from another plant: scenario {head.scenario!r} (fingerprint "
+                              f"{head.fingerprint[:12]}), not this {scenario.name!r} ({scenario.path}, fingerprint "
+                              f"{fingerprint(scenario)[:12]}); only the duration, the expectations, the recording, "
+                              f"the logic's parameters and where logic runs may differ")
+    if head.rate != scenario.run.physics_rate:
+        raise CheckpointError(f"{where}: its physics rate is {head.rate} Hz, the scenario's {scenario.run.physics_rate}")
+    if head.tick > scenario.run.end_tick:
+        raise CheckpointError(f"{where}: taken at t = {head.time:g} s, after this run's end at "
+                              f"t = {scenario.run.end_tick / head.rate:g} s (set run.duration longer)")
+    whole = state.loads(payload, where)
+    try:
+        state.restore(run.plant, whole["plant"], "plant")
+        run.master._answering = whole["master"]["answering"]
+        observers = _observers(run)
+        missing = sorted(set(observers) - set(whole["observers"]))
+        if missing:
+            raise CheckpointError(f"the snapshot holds no state of {', '.join(missing)} (taken by a run without it)")
+        for key, part in observers.items():
+            state.restore(part, whole["observers"][key], key)
+    except CheckpointError as exc:
+        raise CheckpointError(f"{where}: {exc}") from None
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
+        raise CheckpointError(f"{where}: its state does not fit this plant ({type(exc).__name__}: {exc})") from None
+    run.master.communicated = True
+    return head
+
+
+def write(path: Path, data: bytes) -> None:
+    """Write a checkpoint atomically: to a temporary file beside `path`, synced, then renamed."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    partial = path.with_name(f".{path.name}.partial")
+    with open(partial, "wb") as out:
+        out.write(data)
+        out.flush()
+        os.fsync(out.fileno())
+    os.replace(partial, path)
+
+
+def read(path: Path) -> bytes:
+    """A checkpoint file's bytes (checked when applied); a CheckpointError if it cannot be read."""
+    try:
+        return Path(path).read_bytes()
+    except OSError as exc:
+        raise CheckpointError(f"{path}: cannot read the checkpoint: {exc.strerror or exc}") from None
+
+
+class Checkpointer:
+    """An observer that saves the run at given ticks and every `every` ticks, after every other
+    observer has seen the point, to `folder/TICK.ckpt` (`planthub run --checkpoint-at/-every`)."""
+
+    def __init__(self, run, folder: Path, ticks=(), every: int | None = None, log=None):
+        self.run = run
+        self.folder = Path(folder)
+        self.ticks = set(ticks)
+        self.every = every
+        self.log = log
+        self.written: list[Path] = []
+
+    def observe(self, tick: int, signals, events) -> None:
+        if tick in self.ticks or (self.every and tick and tick % self.every == 0):
+            path = self.folder / f"{tick}.ckpt"
+            write(path, capture(self.run))
+            self.written.append(path)
+            if self.log is not None:
+                self.log(f"checkpoint at t = {tick / self.run.scenario.run.physics_rate:g} s: {path}")
+
+    def close(self, reason: str) -> None:
+        """Nothing to release: each checkpoint is complete once written."""
