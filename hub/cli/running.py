@@ -32,7 +32,7 @@ def run_command(args) -> int:
     try:
         # signals: a Ctrl-C or SIGTERM ends the run at its next point, summary and files complete.
         run = Run(scenario, out=out, bus=bus, replay=args.replay, pacer=pacer, signals=True,
-                  observers=progress + ([view] if view is not None else []))
+                  observers=progress + ([view] if view is not None else []), **_checkpointing(args, scenario))
         try:
             with run:
                 _log.debug(f"running {scenario.name} to t = {scenario.run.end_tick / scenario.run.physics_rate:g} s, "
@@ -85,7 +85,8 @@ def test_command(args) -> int:
     verdicts = _Verdicts(args, scenario)
     try:
         with Simulation(args.scenario, overrides(args), out=args.out, bus=bus, replay=args.replay,
-                        pacer=pacer, signals=True, on_emergency=verdicts.emergency) as sim:
+                        pacer=pacer, signals=True, on_emergency=verdicts.emergency,
+                        **_checkpointing(args, scenario)) as sim:
             sim.run()
             outcomes = sim.check()
             summary = sim.summary()
@@ -153,6 +154,31 @@ class _Verdicts:
         """The run was stuck when a signal came (or a second one came): judged on what it reached."""
         summary = sim.summary()
         self.report(summary, sim.check(), summary.ended.reason if summary.ended is not None else reason)
+
+
+def _checkpointing(args, scenario) -> dict:
+    """Run's `resume` and `checkpoints` from --resume, --checkpoint-at and --checkpoint-every."""
+    from hub.run import checkpoint
+
+    rate = scenario.run.physics_rate
+    step = scenario.run.substeps
+    ticks = []
+    for seconds in args.checkpoint_at:
+        tick = round(seconds * rate)
+        if tick % step or tick > scenario.run.end_tick:
+            raise UsageError(f"--checkpoint-at {seconds:g}: checkpoints are taken at communication points, every "
+                             f"{step / rate:g} s from 0 to the run's end at {scenario.run.end_tick / rate:g} s")
+        ticks.append(tick)
+    every = None
+    if args.checkpoint_every is not None:
+        every = round(args.checkpoint_every * rate)
+        if every < step or every % step:
+            raise UsageError(f"--checkpoint-every {args.checkpoint_every:g}: a whole number of communication "
+                             f"steps ({step / rate:g} s) is needed")
+    found = {"checkpoints": (tuple(ticks), every)}
+    if args.resume is not None:
+        found["resume"] = (checkpoint.read(args.resume), str(args.resume))
+    return found
 
 
 def _check_replay(args, out: Path) -> None:

@@ -1,0 +1,224 @@
+"""Checkpoints: a run saved at T and resumed gives, from T on, the rows and events of the run that went on (hub/run/checkpoint.py)."""
+from __future__ import annotations
+
+import pickle
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from hub.core import state
+from hub.core.errors import CheckpointError
+from hub.physics.world import PhysicsWorld
+from hub.run import checkpoint
+from hub.run.assembly import Run
+from hub.scenario.checker import load_scenario
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENARIOS = ROOT / "scenarios"
+
+# (scenario, T in s, --set): every shipped scenario but the bottling plant (below) and the paper's
+# 50 s loop; two with their logic served over the bus by launched participants.
+RESUMED = [
+    ("belt_bottle_sensor.yaml", 1.5), ("belt_ramp_fmu.yaml", 2.0), ("belt_ramp_participant.yaml", 2.0),
+    ("jam.yaml", 2.0), ("pusher.yaml", 1.5), ("robot.yaml", 6.0), ("robot_logic.yaml", 7.0),
+    ("separator.yaml", 6.0), ("separator_logic.yaml", 4.0), ("source_sink.yaml", 2.5), ("station.yaml", 3.0),
+    ("stop_at_barrier.yaml", 2.0), ("stopper_queue.yaml", 3.0), ("switch.yaml", 1.5), ("switch_logic.yaml", 1.5),
+    ("two_drives_distributed.yaml", 1.5), ("paper/acceleration.yaml", 2.0), ("paper/tipping_torque.yaml", 0.8),
+]
+
+
+@pytest.fixture
+def multibody_bottles(monkeypatch):
+    """Bottles as one-link multibodies: pybullet's restoreState puts back their contact points
+    exactly in a freshly built world. As rigid bodies (the default, PhysicsWorld.MAXIMAL) it does
+    not: see test_rigid_bottles_lose_their_contacts_in_a_restore."""
+    monkeypatch.setattr(PhysicsWorld, "MAXIMAL", False)
+
+
+def _after(path: Path, seconds: float) -> list[str]:
+    lines = path.read_text().splitlines()
+    return [line for line in lines[1:] if float(line.split(",")[0].strip('"')) > seconds]
+
+
+def _saved_and_resumed(tmp_path: Path, name: str, seconds: float, overrides=None):
+    """Run to T (a communication point), save, run on to 2T; a second run resumed from the
+    checkpoint runs to 2T. Returns both folders, T and the checkpoint."""
+    scenario = load_scenario(SCENARIOS / name, overrides or {})
+    run = scenario.run
+    saved_at = round(seconds * run.physics_rate) // run.substeps * run.substeps
+    end = min(2 * saved_at, run.end_tick)
+    with Run(scenario, out=tmp_path / "whole") as whole:
+        whole.run(saved_at)
+        data = checkpoint.capture(whole)
+        whole.run(end)
+    with Run(load_scenario(SCENARIOS / name, overrides or {}), out=tmp_path / "resumed",
+             resume=(data, "checkpoint")) as resumed:
+        resumed.run(end)
+        assert resumed.resumed.tick == saved_at
+    return tmp_path / "whole", tmp_path / "resumed", saved_at / run.physics_rate, data
+
+
+@pytest.mark.parametrize("name, seconds", RESUMED, ids=[n for n, _ in RESUMED])
+def test_a_resumed_run_goes_on_bit_for_bit(tmp_path, multibody_bottles, name, seconds):
+    whole, resumed, at, _ = _saved_and_resumed(tmp_path, name, seconds)
+    rows = _after(whole / "recording.csv", at)
+    assert rows, "the run went on past the checkpoint"
+    assert _after(resumed / "recording.csv", at) == rows
+    assert _after(resumed / "events.csv", at) == _after(whole / "events.csv", at)
+
+
+@pytest.mark.xfail(strict=True, reason="pybullet's restoreState does not put back a rigid body's contact points "
+                                       "(btRigidBody, PhysicsWorld.MAXIMAL); a multibody's it does")
+def test_rigid_bottles_lose_their_contacts_in_a_restore(tmp_path):
+    whole, resumed, at, _ = _saved_and_resumed(tmp_path, "belt_bottle_sensor.yaml", 1.5)
+    assert _after(resumed / "recording.csv", at) == _after(whole / "recording.csv", at)
+
+
+def test_a_snapshot_saved_again_after_a_restore_is_the_same(tmp_path, multibody_bottles):
+    """Everything a snapshot holds is put back: saved again at once, its state is the same bit for
+    bit (but the engine's file, whose blocks are named by memory addresses)."""
+    scenario = load_scenario(SCENARIOS / "separator_logic.yaml")
+    with Run(scenario) as run:
+        run.run(600)
+        data = checkpoint.capture(run)
+    with Run(load_scenario(SCENARIOS / "separator_logic.yaml"), resume=(data, "checkpoint")) as run:
+        run.start()
+        again = checkpoint.capture(run)
+    first, second = (state.loads(checkpoint.header(d, "x")[1], "x") for d in (data, again))
+    for whole in (first, second):
+        assert whole["plant"]["world"]["engine"].pop("bullet")
+    assert _differences(first, second) == []
+
+
+def _differences(a, b, path="") -> list[str]:
+    """Where two saved states differ (numpy arrays by dtype, shape and every bit)."""
+    import numpy as np
+
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        same = isinstance(a, np.ndarray) and isinstance(b, np.ndarray) and a.dtype == b.dtype \
+            and a.shape == b.shape and a.tobytes() == b.tobytes()
+        return [] if same else [path]
+    if isinstance(a, dict) and isinstance(b, dict):
+        if set(a) != set(b):
+            return [f"{path} keys"]
+        return [d for k in a for d in _differences(a[k], b[k], f"{path}.{k}")]
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        if len(a) != len(b) or type(a) is not type(b):
+            return [f"{path} length"]
+        return [d for k, (x, y) in enumerate(zip(a, b)) for d in _differences(x, y, f"{path}[{k}]")]
+    if hasattr(a, "__dict__") and type(a) is type(b) and not isinstance(a, type):
+        return _differences(vars(a), vars(b), path)
+    return [] if type(a) is type(b) and a == b else [path]
+
+
+# --- bad checkpoints: each named with its file and cause ------------------------------------
+@pytest.fixture(scope="module")
+def switch_checkpoint():
+    scenario = load_scenario(SCENARIOS / "switch.yaml")
+    with Run(scenario) as run:
+        run.run(150)
+        return checkpoint.capture(run)
+
+
+def _resume(data: bytes, name: str = "switch.yaml", overrides=None):
+    with Run(load_scenario(SCENARIOS / name, overrides or {}), resume=(data, "saved.ckpt")) as run:
+        run.start()
+
+
+def test_not_a_checkpoint(switch_checkpoint):
+    with pytest.raises(CheckpointError, match=r"^saved.ckpt: not a planthub checkpoint"):
+        _resume(b"recording.csv\n" + switch_checkpoint)
+
+
+def test_a_truncated_checkpoint(switch_checkpoint):
+    with pytest.raises(CheckpointError, match=r"^saved.ckpt: truncated or padded: its header promises \d+ bytes"):
+        _resume(switch_checkpoint[:-100])
+    with pytest.raises(CheckpointError, match=r"^saved.ckpt: truncated: the header line has no end"):
+        _resume(switch_checkpoint[:30])
+
+
+def test_a_corrupt_checkpoint(switch_checkpoint):
+    broken = bytearray(switch_checkpoint)
+    broken[-50] ^= 0xFF
+    with pytest.raises(CheckpointError, match=r"^saved.ckpt: corrupt: its state does not match the checksum"):
+        _resume(bytes(broken))
+
+
+def test_a_checkpoint_of_another_scenario(switch_checkpoint):
+    with pytest.raises(CheckpointError, match=r"^saved.ckpt: taken from another plant: scenario 'switch'"):
+        _resume(switch_checkpoint, "belt_bottle_sensor.yaml")
+    with pytest.raises(CheckpointError, match=r"taken from another plant"):
+        _resume(switch_checkpoint, overrides={"run.seed": 7})
+
+
+def test_a_checkpoint_may_resume_with_a_longer_duration(switch_checkpoint):
+    _resume(switch_checkpoint, overrides={"run.duration": 9.0})
+
+
+def test_a_checkpoint_of_another_format(switch_checkpoint):
+    head, payload = checkpoint.header(switch_checkpoint, "x")
+    other = switch_checkpoint.replace(b'"format": 1', b'"format": 99', 1)
+    with pytest.raises(CheckpointError, match=r"^saved.ckpt: checkpoint format 99; this planthub reads format 1"):
+        _resume(other)
+
+
+def test_a_snapshot_naming_foreign_code_is_refused():
+    evil = pickle.dumps({"x": subprocess.Popen}, protocol=5)
+    with pytest.raises(CheckpointError, match=r"^f.ckpt: the saved state cannot be read .*subprocess.Popen is not "
+                                              r"allowed in a snapshot"):
+        state.loads(evil, "f.ckpt")
+    with pytest.raises(CheckpointError, match=r"hub.cli.main.main is not plain data"):
+        state.loads(pickle.dumps({"x": __import__("hub.cli.main", fromlist=["main"]).main}, protocol=5), "f.ckpt")
+
+
+def test_checkpoints_need_a_run_folder():
+    from hub.core.errors import SimulationError
+
+    with pytest.raises(SimulationError, match=r"checkpoints are written into the run's folder"):
+        Run(load_scenario(SCENARIOS / "switch.yaml"), checkpoints=((150,), None))
+
+
+def test_a_checkpoint_file_is_written_whole(tmp_path, switch_checkpoint):
+    path = tmp_path / "checkpoints" / "150.ckpt"
+    checkpoint.write(path, switch_checkpoint)
+    assert checkpoint.read(path) == switch_checkpoint
+    assert [p.name for p in path.parent.iterdir()] == ["150.ckpt"]   # no partial file left
+    with pytest.raises(CheckpointError, match=r"missing.ckpt: cannot read the checkpoint"):
+        checkpoint.read(tmp_path / "missing.ckpt")
+
+
+# --- the command line -------------------------------------------------------------------------
+def _planthub(*args, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "hub", *map(str, args)], cwd=cwd, capture_output=True, text=True,
+                          timeout=300)
+
+
+def test_planthub_run_saves_checkpoints_and_resumes_from_one(tmp_path):
+    scenario = SCENARIOS / "switch.yaml"
+    saved = _planthub("run", scenario, "--out", tmp_path / "a", "--checkpoint-at", "1,2", "--checkpoint-every", "1.5",
+                      "-q", cwd=ROOT)
+    assert saved.returncode == 0, saved.stderr
+    assert sorted(p.name for p in (tmp_path / "a" / "checkpoints").iterdir()) == ["150.ckpt", "225.ckpt", "300.ckpt",
+                                                                                 "450.ckpt", "675.ckpt"]
+    resumed = _planthub("run", scenario, "--out", tmp_path / "b", "--resume", tmp_path / "a/checkpoints/300.ckpt",
+                        "-q", cwd=ROOT)
+    assert resumed.returncode == 0, resumed.stderr
+    rows = (tmp_path / "b" / "recording.csv").read_text().splitlines()
+    assert float(rows[1].split(",")[0].strip('"')) == pytest.approx(2 + 1 / 150)   # the point after the checkpoint
+    assert float(rows[-1].split(",")[0].strip('"')) == pytest.approx(4.5)
+
+
+def test_planthub_run_names_a_checkpoint_time_off_the_grid(tmp_path):
+    done = _planthub("run", SCENARIOS / "bottling_plant.yaml", "--out", tmp_path, "--checkpoint-at", "1.013", cwd=ROOT)
+    assert done.returncode != 0
+    assert "--checkpoint-at 1.013: checkpoints are taken at communication points, every 0.02 s" in done.stderr
+
+
+def test_planthub_run_names_a_bad_checkpoint_file(tmp_path):
+    bad = tmp_path / "bad.ckpt"
+    bad.write_bytes(b"planthub checkpoint\n{}\n")
+    done = _planthub("run", SCENARIOS / "switch.yaml", "--out", tmp_path / "out", "--resume", bad, cwd=ROOT)
+    assert done.returncode != 0
+    assert f"{bad}: its header cannot be read (KeyError" in done.stderr
