@@ -108,7 +108,8 @@ def test_pace_changes_a_paced_run(bus, tmp_path):
         thread = running(run)
         answer = operator.command("pace", value=50.0)
         assert answer["ok"], answer
-        assert pacer.factor == 50.0
+        # The answer goes out when the command is taken at a point; the pace is set right after.
+        assert wait_until(lambda: pacer.factor == 50.0, 5)
         bad = operator.command("pace", value=-1)
         assert not bad["ok"] and "pace takes a factor of real time above 0 and at most 1000" in bad["error"]
         thread.join(60)
