@@ -158,7 +158,6 @@ def test_a_checkpoint_may_resume_with_a_longer_duration(switch_checkpoint):
 
 
 def test_a_checkpoint_of_another_format(switch_checkpoint):
-    head, payload = checkpoint.header(switch_checkpoint, "x")
     other = switch_checkpoint.replace(b'"format": 1', b'"format": 99', 1)
     with pytest.raises(CheckpointError, match=r"^saved.ckpt: checkpoint format 99; this planthub reads format 1"):
         _resume(other)
@@ -197,11 +196,11 @@ def _planthub(*args, cwd: Path) -> subprocess.CompletedProcess:
 
 def test_planthub_run_saves_checkpoints_and_resumes_from_one(tmp_path):
     scenario = SCENARIOS / "switch.yaml"
-    saved = _planthub("run", scenario, "--out", tmp_path / "a", "--checkpoint-at", "1,2", "--checkpoint-every", "1.5",
+    saved = _planthub("run", scenario, "--out", tmp_path / "a", "--checkpoint-at", "0,1,2", "--checkpoint-every", "1.5",
                       "-q", cwd=ROOT)
     assert saved.returncode == 0, saved.stderr
-    assert sorted(p.name for p in (tmp_path / "a" / "checkpoints").iterdir()) == ["150.ckpt", "225.ckpt", "300.ckpt",
-                                                                                 "450.ckpt", "675.ckpt"]
+    assert sorted(p.name for p in (tmp_path / "a" / "checkpoints").iterdir()) == ["0.ckpt", "150.ckpt", "225.ckpt",
+                                                                                 "300.ckpt", "450.ckpt", "675.ckpt"]
     resumed = _planthub("run", scenario, "--out", tmp_path / "b", "--resume", tmp_path / "a/checkpoints/300.ckpt",
                         "-q", cwd=ROOT)
     assert resumed.returncode == 0, resumed.stderr

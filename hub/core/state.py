@@ -6,23 +6,23 @@ changes while the plant runs lives in the attributes a class names in `STATE`, o
 own `save_state`/`restore_state` (Drake keeps all state in one Context; here each owner keeps
 its own, and one walk collects it):
 
-    class Latch:
-        STATE = ("entered", "left", "inside")
+    class Rest:
+        STATE = ("still", "resting", "extents", "fields", "_at_rest")
 
     class PhysicsWorld:
-        STATE = ("tick", "bodies", "transport", …)    # parts that are Stateful are walked into
+        STATE = ("tick", "engine", "bodies", "transport", …)    # its parts are walked into
 
 `save(owner)` gives plain data (numbers, strings, numpy arrays, lists, dicts, tuples, frozen
 dataclasses and enums) that `dumps` turns into bytes; `restore(owner, state)` puts it back into
 an owner of the same structure, in place: a list, dict, set or array the owner already holds
 keeps its identity (another part may hold it too: a flow's closure holds the signals' lists),
-its contents replaced. An attribute that holds a Stateful object, or a list, tuple or dict of
-them, is walked into rather than copied.
+its contents replaced. An attribute that holds another owner, or a list, tuple or dict of
+them, is walked into rather than copied; a class marked `@value` (a trigger's latch, a joint
+motion: replaced whole, or held only at times) is saved whole instead.
 
 A class that talks to something outside Python (the engine, an FMU, a participant) writes
 `save_state() -> object` and `restore_state(state)`; its `STATE` still names the attributes of
-its own those cover, so that tests/test_checkpoint_audit.py can check that every attribute that
-changes during a run of every module type is covered by some owner's walk.
+its own those cover, so that a reader sees in one place what changes while it runs.
 """
 from __future__ import annotations
 
@@ -30,18 +30,11 @@ import collections
 import enum
 import io
 import pickle
-from typing import Any, ClassVar, Protocol, runtime_checkable
+from typing import Any
 
 import numpy as np
 
 from hub.core.errors import CheckpointError
-
-
-@runtime_checkable
-class Stateful(Protocol):
-    """An owner of run state: `STATE` names the attributes that change during a run."""
-
-    STATE: ClassVar[tuple[str, ...]]
 
 
 _VALUES: set[type] = set()
@@ -59,7 +52,7 @@ def is_stateful(obj) -> bool:
 
 
 def _is_part(obj) -> bool:
-    """Walked into and put back in place: a Stateful object that is not a value (one an owner
+    """Walked into and put back in place: an owner of state that is not a value (one an owner
     replaces, or holds only at times, is saved whole: a trigger's latch, a box set)."""
     return type(obj) not in _VALUES and is_stateful(obj)
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 import csv
 import time
 from dataclasses import dataclass, field
-from typing import ClassVar
 from pathlib import Path
+from typing import ClassVar
 
 from hub.core.signals import Signals
 from hub.core.slots import SlotRef, SlotType

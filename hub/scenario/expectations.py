@@ -1,10 +1,9 @@
 """Expectations of a scenario (`expect:`), watched at every communication point and judged after the run."""
 from __future__ import annotations
 
-from typing import ClassVar
-
 import operator
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 from hub.core.slots import SlotRef, SlotType
 
