@@ -3,6 +3,7 @@ headers, not the project's framework, with every FMI function they do not implem
 as a stub that returns an error (fmpy binds every function of the standard when it loads an FMU)."""
 import re
 import subprocess
+import sys
 import zipfile
 from pathlib import Path
 
@@ -54,3 +55,12 @@ if __name__ == "__main__":   # python -m tests.foreign_fmus OUT: the stand-in FM
     folder.mkdir(parents=True, exist_ok=True)
     for name, version in (("enum2", 2), ("typed3", 3), ("ball2", 2), ("tank3", 3), ("ticks3", 3), ("stair", 3)):
         print(build(name, version, folder))
+
+
+def build_python_fmu(out: Path) -> Path:
+    """tests/fmu_models/python/belt_drive_py.py exported by PythonFMU into `out`: an FMU another tool
+    built (its description declares no FMU state)."""
+    source = Path(__file__).resolve().parent / "fmu_models" / "python" / "belt_drive_py.py"
+    subprocess.run([sys.executable, "-m", "pythonfmu", "build", "-f", str(source), "-d", str(out)],
+                   check=True, capture_output=True)
+    return out / "belt_drive_py.fmu"

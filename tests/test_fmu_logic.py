@@ -9,6 +9,7 @@ from hub.core.errors import ScenarioError, SimulationError
 from hub.scenario.checker import load_scenario
 
 from .fmus.fmu_support import build
+from .foreign_fmus import build_python_fmu
 from .helpers import ROOT, run_scenario
 
 SCENARIO = ROOT / "scenarios" / "belt_ramp_fmu.yaml"
@@ -243,14 +244,7 @@ def test_event_driven_run_rejects_an_fmu_with_fixed_steps(fmus, write_scenario, 
 @pytest.fixture(scope="module")
 def python_fmu(tmp_path_factory):
     """tests/fmu_models/python/belt_drive_py.py exported by PythonFMU: an FMU another tool built."""
-    import subprocess
-    import sys
-
-    out = tmp_path_factory.mktemp("pythonfmu")
-    source = ROOT / "tests" / "fmu_models" / "python" / "belt_drive_py.py"
-    subprocess.run([sys.executable, "-m", "pythonfmu", "build", "-f", str(source), "-d", str(out)],
-                   check=True, capture_output=True)
-    return out / "belt_drive_py.fmu"
+    return build_python_fmu(tmp_path_factory.mktemp("pythonfmu"))
 
 
 def test_a_pythonfmu_export_replaces_the_c_fmu_bit_for_bit(fmus, python_fmu, tmp_path):

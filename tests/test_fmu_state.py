@@ -1,7 +1,5 @@
 """FMU logic slaves saved, stepped on and restored (same instance, a new one, a worker) give the same outputs bit for bit."""
 import struct
-import subprocess
-import sys
 
 import msgpack
 import pytest
@@ -15,6 +13,7 @@ from hub.logic.ssp_slave import SspSlave
 
 from .fmus.fmu_support import TEST_MODELS_DIR, build
 from .foreign_fmus import build as build_foreign
+from .foreign_fmus import build_python_fmu
 from .helpers import ROOT
 from .ssp_archives import write_ssp
 
@@ -56,11 +55,7 @@ def foreign(tmp_path_factory):
 @pytest.fixture(scope="module")
 def python_fmu(tmp_path_factory):
     """tests/fmu_models/python/belt_drive_py.py exported by PythonFMU, whose description declares no FMU state."""
-    out = tmp_path_factory.mktemp("pythonfmu")
-    source = ROOT / "tests" / "fmu_models" / "python" / "belt_drive_py.py"
-    subprocess.run([sys.executable, "-m", "pythonfmu", "build", "-f", str(source), "-d", str(out)],
-                   check=True, capture_output=True)
-    return out / "belt_drive_py.fmu"
+    return build_python_fmu(tmp_path_factory.mktemp("pythonfmu"))
 
 
 def bits(rows):
