@@ -118,9 +118,7 @@ def _encode(tag: Tag, value) -> list:
     if tag.type is SlotType.VOID or tag.handshake:
         return [int(value) % 65536]
     if tag.scale is not None:
-        (low, high), (r0, r1) = tag.scale, tag.raw
-        raw = round(r0 + (value - low) * (r1 - r0) / (high - low))
-        return [min(max(raw, r0), r1) % 65536]
+        return [tag.to_raw(value) % 65536]
     if tag.type is SlotType.REAL:
         return list(struct.unpack(">HH", struct.pack(">f", value)))
     return list(struct.unpack(">HH", struct.pack(">i", max(min(int(value), 2 ** 31 - 1), -2 ** 31))))
@@ -137,11 +135,7 @@ def _decode(tag: Tag, words: list):
     if tag.handshake:
         return words[0]
     if tag.scale is not None:
-        (low, high), (r0, r1) = tag.scale, tag.raw
-        raw = words[0] - 65536 if r0 < 0 and words[0] > 32767 else words[0]
-        if not r0 <= raw <= r1:
-            raise ValueError(f"raw {raw} is outside {r0}..{r1}")
-        return low + (raw - r0) * (high - low) / (r1 - r0)
+        return tag.from_raw(words[0] - 65536 if tag.raw[0] < 0 and words[0] > 32767 else words[0])
     if tag.type is SlotType.REAL:
         return float(struct.unpack(">f", struct.pack(">HH", *words))[0])
     return struct.unpack(">i", struct.pack(">HH", *words))[0]

@@ -12,6 +12,13 @@ the PLC's *inputs*, its outputs (the commands it sends to actuators) are the PLC
 | real      | Double / 2 input registers (Float32), or 1 register scaled | Double / 2 holding registers, or 1 scaled |
 | string    | String / `length` input registers (2 bytes each, UTF-8, zero-padded) | String / `length` holding registers |
 
+S7 (`planthub gateway s7`): PLC inputs in the process inputs I, outputs in the process outputs Q,
+the handshake in the markers M, strings in data block 1; in each area the bits first (8 to a byte),
+then the numbers at even bytes: a counter or a scaled real a Word/Int (2 bytes), an int a DInt, a
+real a Real (4 bytes, big-endian as S7 keeps them), a string an S7 STRING[2·length]. EtherNet/IP
+(`planthub gateway enip`): each tag a Logix controller tag of its name, BOOL, DINT (counters wrap
+at 2³¹), REAL (engineering units; `scale` is only its range) or SSTRING.
+
 A real with `scale: [low, high]` is one register of raw counts: `raw` (default 0…27648, the usual
 analogue I/O range) maps linearly onto low…high, clamped for inputs, refused beyond for outputs.
 vec3 and quat slots are not mapped (a PLC has no such type): a gateway refuses them by name.
@@ -43,6 +50,8 @@ WORDS = {INPUT: "input_register", OUTPUT: "holding_register"}
 _OPCUA = {(SlotType.VOID, INPUT): "UInt32", (SlotType.VOID, OUTPUT): "Boolean", SlotType.BOOL: "Boolean",
           SlotType.INT: "Int32", SlotType.REAL: "Double", SlotType.STRING: "String"}
 HANDSHAKE = "gateway"
+S7_AREAS = {INPUT: "I", OUTPUT: "Q"}    # process image of inputs, of outputs
+S7_MARKERS, S7_DB, S7_DB_NUMBER = "M", "DB", 1
 
 
 @dataclass(frozen=True)
@@ -63,6 +72,9 @@ class Tag:
     length: int = STRING_REGISTERS
     address: int = 0            # Modbus: first address in its table
     handshake: bool = False
+    s7_area: str = ""           # S7: I, Q, M or DB (data block S7_DB_NUMBER)
+    s7_byte: int = 0            # S7: its first byte in that area
+    s7_bit: int = -1            # S7: its bit in that byte (a Bool), else -1
 
     @property
     def opcua_type(self) -> str:
@@ -100,6 +112,56 @@ class Tag:
         if self.scale is not None:
             return f"raw {self.raw[0]}..{self.raw[1]} = {self.scale[0]:g}..{self.scale[1]:g}"
         return "Float32, high word first" if self.type is SlotType.REAL else "Int32, high word first"
+
+    @property
+    def s7_type(self) -> str:
+        """Its S7 data type (TIA Portal's names)."""
+        if self.table in BITS.values():
+            return "Bool"
+        if self.type is SlotType.STRING:
+            return f"String[{2 * self.length}]"
+        if self.type is SlotType.VOID or self.handshake:
+            return "Word"
+        if self.scale is not None:
+            return "Int"
+        return "Real" if self.type is SlotType.REAL else "DInt"
+
+    @property
+    def s7_size(self) -> int:
+        """Bytes it takes in its S7 area (a Bool: 1, its byte shared)."""
+        if self.type is SlotType.STRING:
+            return 2 + 2 * self.length
+        return {"Bool": 1, "Word": 2, "Int": 2}.get(self.s7_type, 4)
+
+    @property
+    def s7_address(self) -> str:
+        """Its absolute S7 address: I0.0, QW4, MD8, DB1.DBB0 (a string's first byte)."""
+        if self.s7_area == S7_DB:
+            return f"DB{S7_DB_NUMBER}.DBB{self.s7_byte}"
+        if self.s7_bit >= 0:
+            return f"{self.s7_area}{self.s7_byte}.{self.s7_bit}"
+        return f"{self.s7_area}{'W' if self.s7_size == 2 else 'D'}{self.s7_byte}"
+
+    @property
+    def logix_type(self) -> str:
+        """Its Logix (EtherNet/IP) data type."""
+        if self.table in BITS.values():
+            return "BOOL"
+        if self.type is SlotType.STRING:
+            return "SSTRING"
+        return "REAL" if self.type is SlotType.REAL and not self.handshake else "DINT"
+
+    def to_raw(self, value: float) -> int:
+        """A scaled real as raw counts, clamped to the raw range (a PLC input)."""
+        (low, high), (r0, r1) = self.scale, self.raw
+        return min(max(round(r0 + (value - low) * (r1 - r0) / (high - low)), r0), r1)
+
+    def from_raw(self, raw: int) -> float:
+        """Raw counts a PLC wrote as the scaled real; a ValueError beyond the raw range."""
+        (low, high), (r0, r1) = self.scale, self.raw
+        if not r0 <= raw <= r1:
+            raise ValueError(f"raw {raw} is outside {r0}..{r1}")
+        return low + (raw - r0) * (high - low) / (r1 - r0)
 
     def check_written(self, value):
         """A value the PLC wrote, as the plant takes it; a ValueError says why it is refused."""
@@ -140,12 +202,27 @@ class TagMap:
         out = io.StringIO()
         writer = csv.writer(out, lineterminator="\n")
         writer.writerow(["tag", "direction", "slot", "plant", "opcua_node", "opcua_type", "modbus_table",
-                         "modbus_address", "modbus_count", "modbus_encoding", "range", "units", "description"])
+                         "modbus_address", "modbus_count", "modbus_encoding", "range", "units", "description",
+                         "s7_address", "s7_type", "logix_type"])
         for t in self.tags:
             limits = t.range or t.scale
             writer.writerow([t.name, t.direction, t.slot, t.plant, f"nsu={namespace(self.run)};s={t.node_id}",
                              t.opcua_type, t.table, t.address, t.count, t.encoding,
-                             f"{limits[0]:g}..{limits[1]:g}" if limits else "", t.units, t.description])
+                             f"{limits[0]:g}..{limits[1]:g}" if limits else "", t.units, t.description,
+                             t.s7_address, t.s7_type, t.logix_type])
+        return out.getvalue()
+
+    def tia_csv(self) -> str:
+        """The S7 tags as a PLC tag table in TIA Portal's columns (I, Q and M only: a tag table holds no
+        data block; the strings of DB1 are in `csv()`, with their offsets)."""
+        out = io.StringIO()
+        writer = csv.writer(out, lineterminator="\n")
+        writer.writerow(["Name", "Path", "Data Type", "Logical Address", "Comment", "Hmi Visible",
+                         "Hmi Accessible", "Hmi Writeable", "Typeobject ID", "Version ID"])
+        for t in self.tags:
+            if t.s7_area != S7_DB:
+                writer.writerow([t.name, f"planthub {self.run}", t.s7_type, f"%{t.s7_address}", t.description,
+                                 "True", "True", str(t.direction == OUTPUT), "", ""])
         return out.getvalue()
 
 
@@ -208,8 +285,26 @@ def tag_map(scenario, name: str, overrides_file: Path | None = None) -> TagMap:
                      "lockstep: the PLC writes `cycle` back here when its scan is done", handshake=True),
                  Tag("plc_ready", SlotType.BOOL, OUTPUT, "plc_ready", HANDSHAKE, "",
                      "lockstep: the PLC sets it once it is running; the gateway then joins the plant", handshake=True)]
-    tags = _addresses(handshake + tags, overrides_file)
+    tags = _s7_layout(_addresses(handshake + tags, overrides_file))
     return TagMap(scenario.name, tuple(tags))
+
+
+def _s7_layout(tags: list[Tag]) -> list[Tag]:
+    """S7 addresses: in each area the bits from byte 0, then the numbers and strings at even bytes, in order."""
+    area = lambda t: S7_DB if t.type is SlotType.STRING else S7_MARKERS if t.handshake else S7_AREAS[t.direction]
+    placed = {}
+    for name in dict.fromkeys(map(area, tags)):
+        mine = [t for t in tags if area(t) == name]
+        bits = [t for t in mine if t.s7_type == "Bool"]
+        for k, t in enumerate(bits):
+            placed[t.slot] = replace(t, s7_area=name, s7_byte=k // 8, s7_bit=k % 8)
+        at = (len(bits) + 7) // 8
+        for t in mine:
+            if t.s7_type != "Bool":
+                at += at % 2
+                placed[t.slot] = replace(t, s7_area=name, s7_byte=at)
+                at += t.s7_size
+    return [placed[t.slot] for t in tags]
 
 
 def _describe(kind: SlotType, direction: str, plant) -> str:
