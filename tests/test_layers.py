@@ -25,7 +25,8 @@ ALLOWED = {
     "run": {"core", "bus", "scenario", "physics", "logic", "view"},
     "reports": {"core", "scenario", "physics", "run"},
     "gateway": {"core", "bus", "scenario"},
-    "cli": {"core", "bus", "scenario", "physics", "logic", "run", "reports", "view", "gateway"},
+    "campaign": {"core", "scenario"},
+    "cli": {"core", "bus", "scenario", "physics", "logic", "run", "reports", "view", "gateway", "campaign"},
 }
 #: files at the top of hub/: the public names users write, and what each stands for
 TOP = {"__init__": {"run"}, "__main__": {"cli"}, "participant": {"bus"}, "live": {"bus"}}

@@ -1,4 +1,4 @@
-"""Command line: `planthub run|validate|test|describe|check-fmu|report|plot|compare|serve-fmu|send|view|gateway` (also `python -m hub`)."""
+"""Command line: `planthub run|validate|test|campaign|describe|check-fmu|report|plot|compare|serve-fmu|send|view|gateway` (also `python -m hub`)."""
 from __future__ import annotations
 
 import argparse
@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 from hub.cli.bus import add_commands as add_bus_commands
+from hub.cli.campaign import add_command as add_campaign_command
 from hub.cli.compare import add_command as add_compare_command
 from hub.cli.describe import describe
 from hub.cli.gateway import EXAMPLE as add_gateway_example
@@ -119,6 +120,7 @@ def parser() -> tuple[argparse.ArgumentParser, dict]:
                 "describe": lambda args: describe(args.module), "check-fmu": _check_fmu, "report": _report,
                 **add_bus_commands(sub, parents=loud, formatter=_FORMAT, epilog=TABLE),
                 "view": add_view_command(sub, parents=loud, formatter=_FORMAT, epilog=TABLE),
+                "campaign": add_campaign_command(sub, parents=loud, formatter=_FORMAT, epilog=TABLE),
                 "plot": add_plot_command(sub, parents=loud, formatter=_FORMAT, epilog=TABLE),
                 "compare": add_compare_command(sub, parents=loud, formatter=_FORMAT, epilog=TABLE)}
     return top, handlers

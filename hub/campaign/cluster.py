@@ -1,0 +1,172 @@
+"""Every Dask call of planthub: the cluster a campaign's cases run on — an embedded LocalCluster on loopback, or an existing scheduler — and the cases handed to it and collected.
+
+A case is one task of one thread: the task only waits for the case's child process
+(hub/campaign/case.py), so a worker gets one thread per case it runs at once, and the
+LocalCluster one worker per core. Dask itself re-runs a task whose worker died on another
+worker `distributed.scheduler.allowed-failures` times before it reports the task's KilledWorker;
+the embedded cluster sets that to 0 so that this file's own rule holds: one more run
+elsewhere, then the case is reported lost. An existing scheduler keeps its own setting (start it
+with DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES=0 for the same rule).
+"""
+from __future__ import annotations
+
+import logging
+import os
+import uuid
+from dataclasses import dataclass
+
+import dask
+from distributed import Client, Event, LocalCluster, wait
+from distributed.client import FutureCancelledError, FuturesCancelledError
+from distributed.scheduler import KilledWorker
+
+from hub.campaign.case import run_case
+from hub.core.errors import PlanthubError
+
+CONNECT = 30.0   # s to reach a scheduler and, for the embedded cluster, to start it
+CLOSE = 30.0     # s to close the client and the embedded cluster
+
+
+class ClusterError(PlanthubError):
+    """The cluster could not be started or reached."""
+
+
+@dataclass
+class Finished:
+    """A case the cluster is done with: its result (hub/campaign/case.py), or `lost` saying why its
+    worker never returned one."""
+
+    index: int
+    result: dict | None
+    lost: str | None
+    attempt: int
+
+
+def _task(spec: dict, stop: str) -> dict:
+    """Runs on a worker: the case, stopping when the campaign's event is set."""
+    event = Event(stop)
+
+    def stopped() -> bool:
+        try:
+            return event.is_set()
+        except Exception:   # the scheduler is gone: nobody is waiting for this case any more
+            return True
+
+    return run_case(spec, stopped)
+
+
+class Cluster:
+    """The cluster of one campaign: started (or connected) on entry, closed on exit."""
+
+    def __init__(self, scheduler: str | None = None, workers: int | None = None, quiet: bool = True):
+        self.scheduler = scheduler
+        self.workers = workers or os.cpu_count() or 1
+        self.quiet = quiet
+        self.local = None
+        self.client = None
+        self.name = f"planthub-campaign-{uuid.uuid4().hex[:12]}"
+        self.pending: dict = {}   # future → (index, spec, attempt)
+
+    def __enter__(self) -> Cluster:
+        if self.quiet:   # a killed worker is a case's business, reported with it, not a page of warnings
+            for name in ("distributed", "tornado"):
+                logging.getLogger(name).setLevel(logging.CRITICAL)
+        try:
+            if self.scheduler is None:
+                with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+                    self.local = LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True,
+                                              host="127.0.0.1", dashboard_address=None,
+                                              silence_logs=logging.CRITICAL if self.quiet else logging.WARNING)
+                self.client = Client(self.local, timeout=CONNECT)
+            else:
+                self.client = Client(self.scheduler, timeout=CONNECT)
+        except (OSError, TimeoutError) as exc:
+            self.close()
+            where = self.scheduler or "a LocalCluster on 127.0.0.1"
+            raise ClusterError(f"planthub campaign: cannot reach {where}: {exc}") from None
+        self.stop = Event(self.name, client=self.client)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def describe(self) -> str:
+        threads = sum(self.client.nthreads().values())
+        where = f"scheduler {self.scheduler}" if self.local is None else "a LocalCluster on 127.0.0.1"
+        return f"{where}: {len(self.client.nthreads())} workers, {threads} cases at once"
+
+    def slots(self) -> int:
+        """How many cases run at once."""
+        return max(1, sum(self.client.nthreads().values()))
+
+    def submit(self, index: int, spec: dict, attempt: int = 1) -> None:
+        future = self.client.submit(_task, spec, self.name, key=f"{self.name}-case{index}-try{attempt}", pure=False)
+        self.pending[future] = (index, spec, attempt)
+
+    def running(self) -> int:
+        """Cases a worker is running now: each worker's cases handed to it, up to its threads (the
+        scheduler hands a worker more than it runs at once)."""
+        mine = {f.key for f in self.pending}
+        threads = self.client.nthreads()
+        return sum(min(threads.get(worker, 1), sum(key in mine for key in keys))
+                   for worker, keys in self.client.processing().items())
+
+    def finished(self, timeout: float) -> list[Finished]:
+        """The cases that ended within `timeout` s (none: nothing ended yet). A case whose worker
+        died is sent once more, then reported lost."""
+        if not self.pending:
+            return []
+        try:
+            done, _ = wait(list(self.pending), timeout=timeout, return_when="FIRST_COMPLETED")
+        except TimeoutError:
+            return []
+        except FuturesCancelledError:   # cancelled on the scheduler (a restarted cluster): reported below
+            done = [f for f in self.pending if f.done()]
+        out = []
+        for future in done:
+            index, spec, attempt = self.pending.pop(future)
+            try:
+                out.append(Finished(index, future.result(), None, attempt))
+            except KilledWorker as exc:
+                if attempt == 1:
+                    self.submit(index, spec, attempt + 1)
+                else:
+                    out.append(Finished(index, None, f"its worker died in both runs ({exc})", attempt))
+            except FutureCancelledError:
+                out.append(Finished(index, None, "cancelled", attempt))
+            except Exception as exc:   # noqa: BLE001 — the task itself failed: the case's error, named
+                out.append(Finished(index, None, f"{type(exc).__name__}: {exc}", attempt))
+        return sorted(out, key=lambda f: f.index)
+
+    def stop_cases(self, limit: float) -> list[Finished]:
+        """Stop every case: the running ones end (their files written), the waiting ones are
+        cancelled. What came back within `limit` s."""
+        self.stop.set()
+        try:
+            wait(list(self.pending), timeout=limit)
+        except TimeoutError:
+            pass
+        ended = []
+        for future in list(self.pending):
+            if future.done():
+                index, spec, attempt = self.pending.pop(future)
+                try:
+                    ended.append(Finished(index, future.result(), None, attempt))
+                except Exception:   # noqa: BLE001 — a lost or cancelled case is reported as not run
+                    pass
+        self.client.cancel(list(self.pending))
+        return ended
+
+    def close(self) -> None:
+        if self.client is not None:
+            try:
+                self.client.close(timeout=CLOSE)
+            except Exception:   # noqa: BLE001 — closing what may already be gone
+                pass
+            self.client = None
+        if self.local is not None:
+            try:
+                self.local.close(timeout=CLOSE)
+            except Exception:   # noqa: BLE001
+                pass
+            self.local = None
