@@ -1,0 +1,158 @@
+"""The EtherNet/IP side of a gateway (cpppo's Logix simulator): every cpppo call planthub makes is in this file.
+
+Each tag is a controller-scoped Logix tag of its name and type (BOOL, DINT, REAL, SSTRING; the tag
+map decides them), read and written by name with the Read/Write Tag services, as a ControlLogix
+answers pylogix or pycomm3. Reads are answered from the process image. A write is checked before it
+is taken, and refused with CIP's own general status: a PLC input 0x0F "privilege violation"; a value
+out of the tag's range, not finite or a string too long or not UTF-8 0x09 "invalid attribute
+value". cpppo itself refuses an unknown tag (0x05 "path destination unknown"), a value of a type
+that does not fit the tag, or more elements than the tag has (0xFF, extended status 0x2107 and
+0x2105); every refusal is logged, and nothing of it reaches the plant.
+
+cpppo was chosen as the only maintained pure-Python EtherNet/IP *server* (pycomm3 and pylogix are
+clients); it keeps its tags in module globals, so one gateway per process (as `planthub gateway` is).
+Its answers take a few ms of CPU each (a Python parser per request): see README's costs.
+"""
+from __future__ import annotations
+
+import logging
+import socket
+import threading
+import time
+
+import cpppo
+from cpppo.server.enip import device
+from cpppo.server.enip.main import main as enip_main
+
+from hub.core.errors import PlanthubError
+from hub.core.slots import SlotType
+from hub.gateway.image import ProcessImage
+from hub.gateway.tags import OUTPUT, Tag
+
+PRIVILEGE_VIOLATION, INVALID_VALUE = 0x0F, 0x09
+_CPPPO_LOGS = ("enip.srv", "enip.ucmm", "network", "cpppo")
+_REFUSING = ("enip.dev", "enip.lgx")
+DINT = 2 ** 31
+
+
+class EnipServer:
+    """The tags of `image` served as Logix controller tags at `endpoint` (HOST:PORT; EtherNet/IP's own port is 44818)."""
+
+    def __init__(self, image: ProcessImage, endpoint: str):
+        self.image = image
+        host, _, port = endpoint.rpartition(":")
+        self.host, self.port = host or "127.0.0.1", int(port)
+        self.control = None
+        self.thread = None
+        self.refusals = _Refusals(image)
+
+    async def start(self) -> None:
+        for name in _CPPPO_LOGS:
+            logging.getLogger(name).setLevel(logging.ERROR)   # it logs every connection at WARNING
+        for name in _REFUSING:   # what they say of refused requests goes to the gateway's log, as a refusal
+            logger = logging.getLogger(name)
+            logger.setLevel(logging.INFO + 5)   # cpppo's NORMAL, at which it tells why a request failed
+            logger.propagate = False
+            logger.addHandler(self.refusals)
+        image = self.image
+
+        class TagAttribute(_TagAttribute):
+            pass
+        TagAttribute.image = image
+        TagAttribute.by_name = {t.name: t for t in image.tags.tags}
+        self.control = cpppo.apidict(timeout=1.0)
+        self.control["control"] = cpppo.dotdict(done=False, disable=False)
+        argv = ["--address", f"{self.host}:{self.port}", "--no-config",
+                *(f"{t.name}={t.logix_type}" for t in image.tags.tags)]
+        self.thread = threading.Thread(target=enip_main, name="enip server", daemon=True,
+                                       kwargs=dict(argv=argv, attribute_class=TagAttribute,
+                                                   server=dict(control=self.control["control"])))
+        self.thread.start()
+        deadline = time.monotonic() + 10.0
+        while True:   # until it listens (cpppo binds in its own thread)
+            try:
+                socket.create_connection((self.host, self.port), timeout=1.0).close()
+                return
+            except OSError as exc:
+                if not self.thread.is_alive() or time.monotonic() > deadline:
+                    raise PlanthubError(f"EtherNet/IP server at {self.host}:{self.port} did not start: {exc}") from None
+                time.sleep(0.05)
+
+    async def publish(self, changed: dict) -> None:
+        """Nothing to do: every read is answered from the image."""
+
+    async def stop(self) -> None:
+        if self.thread is not None:
+            self.control["control"]["done"] = True
+            self.thread.join(5.0)
+            self.thread = None
+        for name in _REFUSING:
+            logging.getLogger(name).removeHandler(self.refusals)
+
+
+class _TagAttribute(device.Attribute):
+    """A Logix tag whose value is the process image's; cpppo checks a write's type and size first,
+    then this checks its direction and value. A refusal is answered through cpppo's `error` (its
+    status for the request), cleared at the tag's next access."""
+
+    image: ProcessImage = None
+    by_name: dict = {}
+
+    @property
+    def tag(self) -> Tag:
+        return self.by_name[self.name]
+
+    def __getitem__(self, key):
+        self.error = 0x00
+        tag = self.tag
+        value = self.image.read(tag.slot)
+        if tag.type is SlotType.STRING:
+            value = value.encode()[:2 * tag.length].decode(errors="ignore")
+        elif tag.logix_type == "DINT":
+            value = (int(value) + DINT) % (2 * DINT) - DINT if tag.type is SlotType.VOID else \
+                max(min(int(value), DINT - 1), -DINT)
+        self.default = value
+        return super().__getitem__(key)
+
+    def __setitem__(self, key, value):
+        self.error = 0x00
+        tag = self.tag
+        value = list(value)[0] if isinstance(key, slice) else value
+        where = f"{tag.name} (EtherNet/IP)"
+        if tag.direction != OUTPUT:
+            self.image.refuse(where, "0x0F privilege violation: a PLC input is read-only")
+            self.error = PRIVILEGE_VIOLATION
+            return
+        try:
+            if tag.type is SlotType.STRING:
+                value = value if isinstance(value, str) else bytes(value).decode()
+                if len(value.encode()) > 2 * tag.length:
+                    raise ValueError(f"{len(value.encode())} bytes is longer than {2 * tag.length}")
+            else:
+                value = {"BOOL": bool, "REAL": float, "DINT": int}[tag.logix_type](value)
+            value = tag.check_written(value)
+        except (ValueError, UnicodeDecodeError) as exc:
+            self.image.refuse(where, f"0x09 invalid attribute value: {exc}")
+            self.error = INVALID_VALUE
+            return
+        self.image.write(tag.slot, value)
+        super().__setitem__(key, [value] if isinstance(key, slice) else value)
+
+
+class _Refusals(logging.Handler):
+    """The requests cpppo refuses itself (an unknown tag, a type or a size that does not fit), logged as
+    the gateway's refusals: cpppo says so only in its own log."""
+
+    def __init__(self, image: ProcessImage):
+        super().__init__(logging.INFO + 5)
+        self.image = image
+
+    def emit(self, record: logging.LogRecord) -> None:
+        text = record.getMessage()
+        if "Failed attempting to resolve path" in text:
+            symbol = text.split("'symbolic': '", 1)[-1].split("'", 1)[0]
+            self.image.refuse(f"{symbol} (EtherNet/IP)", "0x05 path destination unknown: no such tag")
+        elif "failed with Exception" in text and "Write Tag" in text:
+            why = text.split("failed with Exception: ", 1)[-1].splitlines()[0]
+            if "Forced failure" not in why:   # (that is this gateway's own refusal, logged already)
+                self.image.refuse("a tag (EtherNet/IP)", f"0xFF general error: {why}")
