@@ -17,6 +17,16 @@ from hub.scenario.yamlsource import line_of, load_yaml
 DEFAULT_TIME_LIMIT = 600.0   # s: the schema's default; no case waits without a limit
 
 
+class CampaignError(ScenarioError):
+    """A campaign file, or a case it makes, does not pass its checks; every problem listed."""
+
+    def __init__(self, problems: list[Problem]):
+        super().__init__(problems)
+        lines = "\n".join(f"  - {p}" for p in self.problems)
+        count = len(self.problems)
+        self.args = (f"{count} problem{'s' if count != 1 else ''} in campaign:\n{lines}",)
+
+
 @dataclass(frozen=True)
 class Case:
     """One run of a campaign: a scenario with its `--set` values. `index` orders the cases the same
@@ -60,12 +70,12 @@ def load_campaign(path) -> Campaign:
     path = Path(path)
     data, lines, problems = load_yaml(path)
     if data is None:
-        raise ScenarioError(problems)
+        raise CampaignError(problems)
     checker = _Checker(path, lines, problems)
     schema = json.loads((SCHEMAS / "campaign.schema.json").read_text())
     checker.validate(data, schema)
     if not isinstance(data, dict) or checker.problems:
-        raise ScenarioError(checker.problems)
+        raise CampaignError(checker.problems)
     return checker.expand(data)
 
 
@@ -91,7 +101,7 @@ class _Checker:
                     self.problem(at + (key,), f"unknown key {key!r}{did_you_mean(key, known)}")
             elif error.validator == "required":
                 self.problem(at, error.message.replace("is a required property", "is missing"))
-            elif error.validator == "propertyNames":
+            elif "propertyNames" in error.schema_path:
                 self.problem(at + (error.instance,), f"{error.instance!r} is not a dotted key of a scenario "
                                                      "(as --set takes it, e.g. objects.belt.speed)")
             elif error.validator == "oneOf" and at == ("seeds",):
@@ -112,6 +122,8 @@ class _Checker:
         if "seeds" in data and "run.seed" in {*matrix, *zipped}:
             where = "matrix" if "run.seed" in matrix else "zip"
             self.problem((where, "run.seed"), "run.seed is given by `seeds` too: give the seeds in one place")
+        if self.problems:   # cases of a matrix that does not hold together would only repeat it
+            raise CampaignError(self.problems)
         resume = None
         if "from" in data:
             resume = (base / data["from"]).resolve()
@@ -134,10 +146,10 @@ class _Checker:
                     parameters = tuple(combo) + ((("run.seed", seed),) if seed is not None else ())
                     expect = tuple(own_expect if isinstance(own_expect, list) else []) + tuple(data.get("expect", []))
                     case = Case(len(cases), scenario, scenario.stem, parameters, expect, time_limit, resume)
-                    name = self.check_case(case, entry, len(own_expect) if isinstance(own_expect, list) else 0)
+                    name = self.check_case(case, n, entry, len(own_expect) if isinstance(own_expect, list) else 0)
                     cases.append(Case(case.index, scenario, name, parameters, expect, time_limit, resume))
         if self.problems:
-            raise ScenarioError(self.problems)
+            raise CampaignError(self.problems)
         return Campaign(self.path, data.get("name", self.path.stem), tuple(cases))
 
     @staticmethod
@@ -148,18 +160,18 @@ class _Checker:
         pairs = [[(key, values[i]) for key, values in zipped.items()] for i in range(count)]
         return [m + z for m in product for z in pairs]
 
-    def check_case(self, case: Case, entry: str, own_count: int) -> str:
+    def check_case(self, case: Case, n: int, entry: str, own_count: int) -> str:
         """Load the case's scenario with its values; its problems reported at the campaign's line
         that caused them (a matrix value, an expectation) where one did. The scenario's name."""
         try:
             return load_scenario(case.scenario, case.overrides()).name
         except ScenarioError as exc:
             for problem in exc.problems:
-                self.problem(*self.cause(problem, case, entry, own_count))
+                self.problem(*self.cause(problem, case, n, entry, own_count))
             return case.scenario.stem
 
-    def cause(self, problem: Problem, case: Case, entry: str, own_count: int) -> tuple[tuple, str]:
-        where = f"in {entry} with {case.label}: "
+    def cause(self, problem: Problem, case: Case, n: int, entry: str, own_count: int) -> tuple[tuple, str]:
+        where = f"in {entry}: "
         for key, value in case.parameters:
             if problem.path == key or problem.path.startswith((key + ".", key + "[")):
                 place = self.value_place(key, value)
@@ -168,7 +180,7 @@ class _Checker:
             n = int(problem.path[len("expect["):problem.path.index("]")])
             if n >= own_count:
                 return ("expect", n - own_count), f"{where}{problem.path}: {problem.message}"
-        return ("scenarios",), f"{where}{problem}"
+        return ("scenarios", n), f"{where}{problem}"
 
     def value_place(self, key: str, value) -> tuple:
         """Where a case's value of `key` is written in the campaign file: its place in `matrix` or

@@ -1,0 +1,135 @@
+"""Campaign files (hub/campaign/plan.py): the cases a matrix, `zip` and seeds make, and every mistake named with file and line."""
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from hub.campaign.plan import CampaignError, load_campaign
+
+from .helpers import ROOT
+
+SCENARIO = ROOT / "scenarios" / "belt_bottle_sensor.yaml"
+
+
+def write(tmp_path, text: str):
+    path = tmp_path / "campaign.yaml"
+    path.write_text(textwrap.dedent(text).replace("SCENARIO", str(SCENARIO)))
+    return path
+
+
+def problems(tmp_path, text: str) -> str:
+    with pytest.raises(CampaignError) as caught:
+        load_campaign(write(tmp_path, text))
+    return str(caught.value)
+
+
+def test_matrix_zip_and_seeds_make_cases_in_file_order(tmp_path):
+    campaign = load_campaign(write(tmp_path, """\
+        planthub: 1
+        name: speeds
+        scenarios: [SCENARIO]
+        matrix:
+          objects.belt.speed: [0.3, 0.5]
+        zip:
+          objects.belt.k: [8, 16]
+          run.duration: [1, 2]
+        seeds: [3, 4]
+        expect:
+          - {name: moved, slot: barrier.trigger.occupied, is: {"==": false}}
+        time_limit: 30
+        """))
+    assert campaign.name == "speeds"
+    assert [c.label for c in campaign.cases][:3] == [
+        "belt_bottle_sensor[objects.belt.speed=0.3, objects.belt.k=8, run.duration=1, run.seed=3]",
+        "belt_bottle_sensor[objects.belt.speed=0.3, objects.belt.k=8, run.duration=1, run.seed=4]",
+        "belt_bottle_sensor[objects.belt.speed=0.3, objects.belt.k=16, run.duration=2, run.seed=3]"]
+    assert len(campaign.cases) == 2 * 2 * 2
+    assert [c.index for c in campaign.cases] == list(range(8))
+    case = campaign.cases[-1]
+    assert case.overrides() == {"objects.belt.speed": 0.5, "objects.belt.k": 16, "run.duration": 2, "run.seed": 4,
+                                "expect": [{"name": "moved", "slot": "barrier.trigger.occupied", "is": {"==": False}}]}
+    assert case.time_limit == 30 and case.folder == "cases/007-belt_bottle_sensor"
+
+
+def test_a_seed_count_and_no_matrix(tmp_path):
+    campaign = load_campaign(write(tmp_path, "planthub: 1\nscenarios: [SCENARIO]\nseeds: 3\n"))
+    assert [c.parameters for c in campaign.cases] == [(("run.seed", 0),), (("run.seed", 1),), (("run.seed", 2),)]
+    assert campaign.cases[0].time_limit == 600   # no case waits without a limit
+
+
+def test_shape_mistakes_are_named_at_their_lines(tmp_path):
+    text = problems(tmp_path, """\
+        planthub: 1
+        scenarios: []
+        matrix:
+          objects.belt.speed: 0.3
+          "objects belt": [1]
+        seeds: [1, 1]
+        time_limit: -3
+        timelimit: 3
+        """)
+    assert "problems in campaign:" in text
+    assert "campaign.yaml:2: scenarios: [] should be non-empty" in text
+    assert "campaign.yaml:4: matrix.objects.belt.speed: 0.3 is not of type 'array'" in text
+    assert ("campaign.yaml:5: matrix.objects belt: 'objects belt' is not a dotted key of a scenario "
+            "(as --set takes it, e.g. objects.belt.speed)") in text
+    assert ("campaign.yaml:6: seeds: expected a number of seeds (1 or more) or a list of different seeds "
+            "(0 or more)") in text
+    assert "campaign.yaml:7: time_limit: -3 is less than or equal to the minimum of 0" in text
+    assert "campaign.yaml:8: timelimit: unknown key 'timelimit' (did you mean 'time_limit'?)" in text
+
+
+def test_a_matrix_that_does_not_hold_together(tmp_path):
+    text = problems(tmp_path, """\
+        planthub: 1
+        scenarios: [SCENARIO]
+        matrix:
+          run.seed: [0, 1]
+          objects.belt.k: [8]
+        zip:
+          run.duration: [1, 2]
+          objects.belt.k: [8]
+        seeds: 2
+        """)
+    assert "campaign.yaml:4: matrix.run.seed: run.seed is given by `seeds` too: give the seeds in one place" in text
+    assert ("campaign.yaml:6: zip: the lists of `zip` are taken pairwise and need one length; they have "
+            "run.duration: 2, objects.belt.k: 1") in text
+    assert "campaign.yaml:8: zip.objects.belt.k: objects.belt.k is in `matrix` too: give its values in one of them" in text
+
+
+def test_a_case_the_scenario_refuses_is_named_at_the_campaigns_line(tmp_path):
+    text = problems(tmp_path, """\
+        planthub: 1
+        scenarios:
+          - SCENARIO
+          - missing.yaml
+        matrix:
+          objects.belt.sped: [0.3]
+          objects.belt.length: [2.0, -1]
+        expect:
+          - {slot: bottle.body.nothing, is: {"==": 1}}
+        from: nowhere.ckpt
+        """)
+    at = f"in {SCENARIO}"
+    assert (f"campaign.yaml:6: matrix.objects.belt.sped[0]: {at}: objects.belt.sped: unknown key 'sped' "
+            "(did you mean 'speed'?)") in text
+    assert (f"campaign.yaml:7: matrix.objects.belt.length[1]: {at}: objects.belt.length: -1 is less than or equal "
+            "to the minimum of 0") in text
+    assert (f"campaign.yaml:9: expect[0]: {at}: expect[0].slot: object 'bottle' (bottle) has no slot 'body.nothing'"
+            in text)
+    assert f"campaign.yaml:4: scenarios[1]: no scenario file 'missing.yaml' (looked for {tmp_path / 'missing.yaml'})" in text
+    assert f"campaign.yaml:10: from: no checkpoint file 'nowhere.ckpt' (looked for {tmp_path / 'nowhere.ckpt'})" in text
+    assert text.count("unknown key 'sped'") == 1   # found in both cases, said once
+
+
+def test_not_yaml_and_the_command_lines_exit_code(tmp_path):
+    path = tmp_path / "campaign.yaml"
+    path.write_text("planthub: 1\nscenarios: [a\n")
+    done = subprocess.run([sys.executable, "-m", "hub", "campaign", str(path), "--out", str(tmp_path / "out")],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 3
+    assert f"{path}:3: not valid YAML" in done.stderr
+    assert not (tmp_path / "out").exists()
