@@ -98,6 +98,7 @@ class Lockstep:
         self.inbox = Inbox()
         self.tick = 0
         self._closing = False
+        self.logs = None   # the folder where a launched process's output is kept when it ends (the run's)
         self.dropped: dict[tuple[str, str], int] = {}   # (participant, kind) → messages not taken
         self._tag = 0   # the last save or restore request's tag: an answer is taken only under its own
         self._token = None
@@ -139,6 +140,9 @@ class Lockstep:
                "PLANTHUB_CONNECT": ",".join(connect),
                "PLANTHUB_MODE": mode, "PLANTHUB_LEASE": repr(self.lease),
                "PLANTHUB_JOIN_TIMEOUT": repr(spec.join_timeout),
+               # when the hub stops waiting for it (wall clock): a process with a wait of its own
+               # before it joins (a gateway waiting for its PLC) ends that wait first and says why
+               "PLANTHUB_JOIN_DEADLINE": repr(time.time() + spec.join_timeout),
                **tls_environment(self.bus.settings.tls, loopback=not self.bus.settings.connect, own=spec.tls)}
         if spec.tls is None and "PLANTHUB_TLS_KEY" in env and "--tls-key" not in spec.command:
             self.warn(f"{spec.label} is launched with the hub's own certificate and private key "
@@ -561,12 +565,22 @@ class Lockstep:
             for peer in self.peers.values():
                 peer.slave.link = None
                 if peer.process is not None:
-                    peer.process.stop(grace=0.0 if peer.lost else 3.0)
+                    said = peer.process.stop(grace=0.0 if peer.lost else 3.0, keep=self.logs)
+                    self._echo(peer, said)
             if self.dropped:
                 counts = ", ".join(f"{n} {kind} for {name!r}" for (name, kind), n in sorted(self.dropped.items()))
                 self.warn(f"messages dropped on the bus in this run: {counts}")
             if self._token is not None:
                 self._token.undeclare()
+
+
+    def _echo(self, peer: _Peer, said: list[str], most: int = 12) -> None:
+        """What a launched process said (a gateway's refused writes), on the hub's console too: its last lines."""
+        if not said:
+            return
+        where = f" (all {len(said)} in {self.logs / (peer.slave.spec.name + '.log')})" if self.logs is not None else ""
+        lines = "\n".join(f"    {line}" for line in said[-most:])
+        _log.info(f"{peer.slave.spec.label} said{where}:\n{lines}")
 
 
 def misfit(spec: RemoteSpec, inputs, outputs) -> list[str]:

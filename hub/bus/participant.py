@@ -413,9 +413,12 @@ class _Link:
         try:
             outputs = self.logic.advance(t, h, values)
         except Exception as exc:
-            detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
-            self.output.put(wire.seal(self.key, wire.error_message(n, detail,
-                                                                    "".join(traceback.format_tb(exc.__traceback__)))))
+            # The logic's own named error (a gateway's PLC that stopped answering) says all there is:
+            # no traceback for it; anything else is a bug of the logic, and its traceback helps.
+            named = isinstance(exc, PlanthubError)
+            detail = str(exc) if named else "".join(traceback.format_exception_only(type(exc), exc)).strip()
+            trace = "" if named else "".join(traceback.format_tb(exc.__traceback__))
+            self.output.put(wire.seal(self.key, wire.error_message(n, detail, trace)))
             raise PlanthubError(f"step {n} failed: {detail}") from exc
         message = wire.output_message(n, outputs)
         self.last, self.at = (n, message), n

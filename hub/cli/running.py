@@ -44,6 +44,9 @@ def run_command(args) -> int:
         except KeyboardInterrupt:   # one that came outside the run's own handling (hub/run/interruption.py)
             _print_run(run, args)   # the figures so far; summary.json says it was interrupted
             raise
+        except PlanthubError:   # a run that failed (a participant lost, a PLC that stopped answering):
+            _print_run(run, args)   # its figures so far, as summary.json has them; the error follows
+            raise
     finally:
         if view is not None:
             view.stop()   # the run closed it, unless the run failed before its master was made

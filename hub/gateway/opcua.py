@@ -1,6 +1,6 @@
 """The OPC UA side of a gateway (asyncua): every asyncua call planthub makes is in this file.
 
-Address space: Objects/<run>/<folder>/<tag>, one folder per plant object a tag is wired to (and
+Address space: Objects/<run>/<folder>/<tag> (browse names in the plant's namespace), one folder per plant object a tag is wired to (and
 `gateway` for the handshake), in the namespace `urn:planthub:<run>`; each variable's node id is
 `ns=<that namespace>;s=<folder>.<tag>`, its data type the tag's, its Description where it comes
 from, its EngineeringUnits and EURange where the tag map gives them. Only the PLC's outputs are
@@ -59,13 +59,16 @@ class OpcUaServer:
         # No X509 identity token: the channel's own certificate is the one judged (_Users).
         server.set_identity_tokens([ua.UserNameIdentityToken] if self.user else [ua.AnonymousIdentityToken])
         ns = await server.register_namespace(namespace(self.image.tags.run))
-        root = await server.nodes.objects.add_folder(ua.NodeId(self.image.tags.run, ns), self.image.tags.run)
+        # Browse names in the plant's own namespace too (a bare string would put them in namespace 0),
+        # so that a client's get_child(["2:<run>", "2:<folder>", "2:<tag>"]) finds them.
+        name = lambda text: ua.QualifiedName(text, ns)
+        root = await server.nodes.objects.add_folder(ua.NodeId(self.image.tags.run, ns), name(self.image.tags.run))
         folders = {}
         for tag in self.image.tags.tags:
             if tag.folder not in folders:
-                folders[tag.folder] = await root.add_folder(ua.NodeId(tag.folder, ns), tag.folder)
+                folders[tag.folder] = await root.add_folder(ua.NodeId(tag.folder, ns), name(tag.folder))
             node = await folders[tag.folder].add_variable(
-                ua.NodeId(tag.node_id, ns), tag.name, ua.Variant(self.image.values[tag.slot], _VARIANT[tag.opcua_type]))
+                ua.NodeId(tag.node_id, ns), name(tag.name), ua.Variant(self.image.values[tag.slot], _VARIANT[tag.opcua_type]))
             await node.write_attribute(ua.AttributeIds.Description,
                                        ua.DataValue(ua.Variant(ua.LocalizedText(tag.description))))
             if tag.units:

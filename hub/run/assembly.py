@@ -178,6 +178,8 @@ class Run:
         if self._closed:
             return
         self._closed = True
+        if self.out is not None and self.lockstep is not None:
+            self.lockstep.logs = self.out   # what launched participants said is kept beside the run's files
         try:
             self.master.close(reason)
             if self.out is not None:
