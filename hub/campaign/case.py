@@ -44,6 +44,9 @@ def command(spec: dict) -> list[str]:
 def run_case(spec: dict, stopped=lambda: False) -> dict:
     """Run one case to its end, its time limit or until `stopped()` says the campaign stops; never
     raises for anything the case did. `spec`: scenario, out, judge, overrides, resume, time_limit."""
+    if stopped():   # handed to its worker as the campaign stopped
+        return {"verdict": NOT_RUN, "reason": "not run: the campaign was interrupted", "exit_code": None,
+                "wall_seconds": None, "host": socket.gethostname(), "outcomes": [], "figures": {}, "ended": ""}
     out = Path(spec["out"])
     out.mkdir(parents=True, exist_ok=True)
     for old in ("summary.json", "junit.xml"):   # a folder of an earlier campaign judges nothing here

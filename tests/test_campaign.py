@@ -1,0 +1,265 @@
+"""`planthub campaign` on real Dask clusters on loopback: the embedded LocalCluster with two workers, a scheduler and a worker started with Dask's own command line, a worker killed mid-case, a case that hangs, Ctrl-C.
+
+    campaign ──► LocalCluster (127.0.0.1) ──► worker ──► planthub test (a child per case)
+             └─► dask scheduler ◄── dask worker      (--scheduler tcp://127.0.0.1:PORT)
+
+Every case is the belt_bottle_sensor scene, short; a "long" case stands still on a stopped belt.
+"""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+from xml.etree import ElementTree
+
+import psutil
+import pytest
+
+from .helpers import ROOT
+
+SCENARIO = ROOT / "scenarios" / "belt_bottle_sensor.yaml"
+LIMIT = 120   # s: the longest any campaign here may take before the test stops it and fails
+
+# speed 0.3 m/s: the bottle is at x = 0.47 m after 1.5 s, short of 0.6 (failed); 0.5 m/s: 0.76 m (passed).
+# A vec3 compares as a list, x first.
+SPEEDS = """\
+    planthub: 1
+    name: speeds
+    scenarios: [SCENARIO]
+    matrix:
+      objects.belt.speed: [0.3, 0.5]
+      run.duration: [1.5]
+    seeds: 2
+    expect:
+      - {name: far, slot: bottle.body.position, is: {">": [0.6, -1, -1]}}
+    time_limit: 60
+    """
+LONG = {"objects.belt.speed": 0, "run.duration": 1000}   # ~5 s of wall time here
+
+
+def write(folder: Path, text: str, name: str = "campaign.yaml") -> Path:
+    path = folder / name
+    path.write_text(textwrap.dedent(text).replace("SCENARIO", str(SCENARIO)))
+    return path
+
+
+def long_case(folder: Path, time_limit: float, count: int = 1, duration: float = LONG["run.duration"]) -> Path:
+    return write(folder, f"""\
+        planthub: 1
+        name: long
+        scenarios: [SCENARIO]
+        matrix:
+          objects.belt.speed: [0]
+          run.duration: [{duration}]
+        seeds: {count}
+        time_limit: {time_limit}
+        """)
+
+
+def start(args: list[str], cwd: Path) -> subprocess.Popen:
+    """A process in a session of its own (so a test can stop all it started), its output in files."""
+    log = open(cwd / f"{Path(args[2] if args[1] == '-m' else args[0]).name}-{time.monotonic_ns()}.log", "w")
+    return subprocess.Popen(args, cwd=cwd, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
+                            stdin=subprocess.DEVNULL)
+
+
+def stop(process: subprocess.Popen) -> None:
+    """The process's whole session ended: SIGTERM, then SIGKILL."""
+    for sig in (signal.SIGTERM, signal.SIGKILL):
+        try:
+            os.killpg(process.pid, sig)
+        except ProcessLookupError:
+            return
+        try:
+            process.wait(timeout=10)
+            return
+        except subprocess.TimeoutExpired:
+            continue
+
+
+class Campaign:
+    """`planthub campaign` as a child process; stopped whatever happens."""
+
+    def __init__(self, folder: Path, file: Path, *options: str):
+        self.out, self.junit = folder / "out", folder / "campaign.xml"
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", "hub", "campaign", str(file), "--out", str(self.out), "--junit", str(self.junit),
+             *options], cwd=folder, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            start_new_session=True, stdin=subprocess.DEVNULL)
+        self.stdout = self.stderr = ""
+
+    def wait(self) -> int:
+        try:
+            self.stdout, self.stderr = self.process.communicate(timeout=LIMIT)
+        except subprocess.TimeoutExpired:
+            stop(self.process)
+            self.stdout, self.stderr = self.process.communicate(timeout=10)
+            pytest.fail(f"the campaign took over {LIMIT} s:\n{self.stdout}\n{self.stderr}")
+        finally:
+            stop(self.process)   # what it left in its session (a LocalCluster's workers), if anything
+        return self.process.returncode
+
+    def results(self) -> dict:
+        return json.loads((self.out / "campaign.json").read_text())
+
+    def testcases(self) -> list[tuple[str, str]]:
+        """(name, result) of every testcase of the JUnit file."""
+        root = ElementTree.parse(self.junit).getroot()
+        found = []
+        for case in root.iter("testcase"):
+            marks = [child.tag for child in case if child.tag in ("failure", "error", "skipped")]
+            found.append((case.get("name"), marks[0] if marks else "passed"))
+        return found
+
+
+def case_child(out: Path, limit: float = 60):
+    """The `planthub` child process running a case of the campaign writing to `out`, once it runs."""
+    deadline = time.monotonic() + limit
+    while time.monotonic() < deadline:
+        for process in psutil.process_iter(["cmdline"]):
+            line = process.info["cmdline"] or []
+            if "hub" in line and str(out / "cases") in " ".join(line) and "hub.campaign.case" not in line:
+                return process
+        time.sleep(0.1)
+    pytest.fail(f"no case of {out} started within {limit} s")
+
+
+def same_results(campaign: dict) -> list:
+    """What must be equal for the same campaign on any number of workers (not where or how fast)."""
+    return [(c["label"], c["verdict"], c["outcomes"], c["figures"], c["ended"]) for c in campaign["cases"]]
+
+
+@pytest.fixture(scope="module")
+def local(tmp_path_factory):
+    """The speeds campaign on the embedded LocalCluster with two workers."""
+    folder = tmp_path_factory.mktemp("local")
+    campaign = Campaign(folder, write(folder, SPEEDS), "--workers", "2")
+    campaign.wait()
+    return campaign
+
+
+def test_a_local_cluster_with_two_workers_runs_every_case(local):
+    assert local.process.returncode == 1, local.stderr   # the cases at 0.3 m/s fail their expectation
+    found = local.results()
+    assert "a LocalCluster on 127.0.0.1: 2 workers" in found["cluster"]
+    assert found["passed"] is False and found["ended"] == "every case ran"
+    assert found["counts"] == {"failed": 2, "passed": 2}
+    cases = found["cases"]
+    assert [c["verdict"] for c in cases] == ["failed", "failed", "passed", "passed"]
+    assert [c["parameters"] for c in cases][:2] == [{"objects.belt.speed": 0.3, "run.duration": 1.5, "run.seed": 0},
+                                                    {"objects.belt.speed": 0.3, "run.duration": 1.5, "run.seed": 1}]
+    assert cases[0]["reason"].startswith("far: bottle.body.position was (0.47")
+    for case in cases:
+        assert case["figures"]["simulated_s"] == 1.5 and case["attempts"] == 1
+        assert (local.out / case["folder"] / "summary.json").is_file()
+        assert (local.out / case["folder"] / "recording.csv").is_file()
+    label = "belt_bottle_sensor[objects.belt.speed=0.3, run.duration=1.5, run.seed=0]"
+    assert local.testcases() == [(f"far [{label}]", "failure"), (f"far [{label.replace('seed=0', 'seed=1')}]", "failure"),
+                                 (f"far [{label.replace('0.3', '0.5')}]", "passed"),
+                                 (f"far [{label.replace('0.3', '0.5').replace('seed=0', 'seed=1')}]", "passed")]
+    rows = (local.out / "cases.csv").read_text().splitlines()
+    assert rows[0].startswith("case,scenario,objects.belt.speed,run.duration,run.seed,verdict,failed,wall_s,simulated_s")
+    assert rows[1].startswith("0,belt_bottle_sensor,0.3,1.5,0,failed,1,") and len(rows) == 5
+    assert "[4/4]" in local.stderr and "0 left" in local.stderr   # progress as the cases finished
+    assert "4 cases: 2 failed, 2 passed; every case ran" in local.stdout
+
+
+@pytest.fixture(scope="module")
+def dask_cluster(tmp_path_factory):
+    """A scheduler and a worker started with Dask's own command line on 127.0.0.1; its address."""
+    folder = tmp_path_factory.mktemp("dask")
+    file = folder / "scheduler.json"
+    dask = str(Path(sys.executable).with_name("dask"))
+    env = {**os.environ, "DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "0"}
+    scheduler = subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                                  "--scheduler-file", str(file)], cwd=folder, env=env, start_new_session=True,
+                                 stdout=subprocess.DEVNULL, stderr=open(folder / "scheduler.log", "w"))
+    worker = None
+    try:
+        deadline = time.monotonic() + 30
+        while not file.is_file() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert file.is_file(), (folder / "scheduler.log").read_text()
+        address = json.loads(file.read_text())["address"]
+        assert address.startswith("tcp://127.0.0.1:")
+        worker = subprocess.Popen([dask, "worker", address, "--host", "127.0.0.1", "--nthreads", "1",
+                                   "--no-dashboard"], cwd=folder, start_new_session=True,
+                                  stdout=subprocess.DEVNULL, stderr=open(folder / "worker.log", "w"))
+        yield address
+    finally:
+        for process in (worker, scheduler):
+            if process is not None:
+                stop(process)
+
+
+def test_a_campaign_on_a_scheduler_and_worker_of_dasks_command_line(dask_cluster, local, tmp_path):
+    campaign = Campaign(tmp_path, write(tmp_path, SPEEDS), "--scheduler", dask_cluster)
+    assert campaign.wait() == 1, campaign.stderr
+    found = campaign.results()
+    assert found["cluster"] == f"scheduler {dask_cluster}: 1 workers, 1 cases at once"
+    # one worker here, two there: the same cases, verdicts and figures
+    assert same_results(found) == same_results(local.results())
+    assert campaign.testcases() == local.testcases()
+
+
+def test_only_the_failed_cases_again(dask_cluster, local, tmp_path):
+    campaign = Campaign(tmp_path, write(tmp_path, SPEEDS), "--scheduler", dask_cluster, "--only-failed", str(local.out))
+    assert campaign.wait() == 1, campaign.stderr
+    found = campaign.results()
+    assert [c["label"] for c in found["cases"]] == [c["label"] for c in local.results()["cases"][:2]]
+    assert [c["verdict"] for c in found["cases"]] == ["failed", "failed"]
+
+
+def test_a_worker_killed_mid_case_has_its_case_run_again_elsewhere(tmp_path):
+    campaign = Campaign(tmp_path, long_case(tmp_path, time_limit=60), "--workers", "2")
+    try:
+        child = case_child(campaign.out)
+        worker = child.parent()
+        worker.kill()   # SIGKILL: the worker process, not its case
+        child.wait(timeout=10)   # the case dies with it (its parent-death signal), not left running
+    finally:
+        code = campaign.wait()
+    assert code == 0, campaign.stderr
+    (case,) = campaign.results()["cases"]
+    assert case["verdict"] == "passed" and case["attempts"] == 2
+    assert case["reason"] == "run again after its worker died (attempt 2)"
+
+
+def test_a_case_that_hangs_is_stopped_at_its_time_limit(tmp_path):
+    campaign = Campaign(tmp_path, long_case(tmp_path, time_limit=2, duration=100000), "--workers", "1")
+    assert campaign.wait() == 1, campaign.stderr
+    found = campaign.results()
+    (case,) = found["cases"]
+    assert case["verdict"] == "timeout"
+    assert case["reason"] == "exceeded its time limit of 2 s and was stopped"
+    # stopped with SIGTERM, the run wrote its files and a summary saying why
+    summary = json.loads((campaign.out / case["folder"] / "summary.json").read_text())
+    assert "SIGTERM" in summary["ended"]["reason"]
+    assert campaign.testcases() == [("the run [belt_bottle_sensor[objects.belt.speed=0, run.duration=100000, "
+                                     "run.seed=0]]", "error")]
+
+
+def test_ctrl_c_stops_the_campaign_and_keeps_what_finished(tmp_path):
+    campaign = Campaign(tmp_path, long_case(tmp_path, time_limit=60, count=3, duration=100000), "--workers", "1")
+    try:
+        child = case_child(campaign.out)
+        started = campaign.out / "cases" / "000-belt_bottle_sensor" / "recording.csv"
+        deadline = time.monotonic() + 30
+        while not started.is_file() and time.monotonic() < deadline:   # the run is under way, its signals handled
+            time.sleep(0.1)
+        campaign.process.send_signal(signal.SIGINT)
+    finally:
+        code = campaign.wait()
+    assert code == 130, campaign.stderr
+    assert not child.is_running()
+    found = campaign.results()
+    assert found["passed"] is False and found["interrupted"] == "SIGINT"
+    assert found["ended"] == "interrupted (SIGINT) after 0 of 3 cases"
+    assert [c["verdict"] for c in found["cases"]] == ["stopped", "not run", "not run"]
+    assert [result for _, result in campaign.testcases()] == ["error", "skipped", "skipped", "failure"]
+    assert (campaign.out / found["cases"][0]["folder"] / "summary.json").is_file()
