@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import socket
 import subprocess
 import sys
 import textwrap
@@ -39,7 +40,7 @@ SPEEDS = """\
       - {name: far, slot: bottle.body.position, is: {">": [0.6, -1, -1]}}
     time_limit: 60
     """
-LONG = {"objects.belt.speed": 0, "run.duration": 1000}   # ~5 s of wall time here
+LONG_SECONDS = 600   # s simulated of a bottle standing on a stopped belt: ~3 s of wall time here
 
 
 def write(folder: Path, text: str, name: str = "campaign.yaml") -> Path:
@@ -48,7 +49,7 @@ def write(folder: Path, text: str, name: str = "campaign.yaml") -> Path:
     return path
 
 
-def long_case(folder: Path, time_limit: float, count: int = 1, duration: float = LONG["run.duration"]) -> Path:
+def long_case(folder: Path, time_limit: float, count: int = 1, duration: float = LONG_SECONDS) -> Path:
     return write(folder, f"""\
         planthub: 1
         name: long
@@ -85,12 +86,12 @@ def stop(process: subprocess.Popen) -> None:
 class Campaign:
     """`planthub campaign` as a child process; stopped whatever happens."""
 
-    def __init__(self, folder: Path, file: Path, *options: str):
+    def __init__(self, folder: Path, file: Path, *options: str, env: dict | None = None):
         self.out, self.junit = folder / "out", folder / "campaign.xml"
         self.process = subprocess.Popen(
             [sys.executable, "-m", "hub", "campaign", str(file), "--out", str(self.out), "--junit", str(self.junit),
              *options], cwd=folder, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-            start_new_session=True, stdin=subprocess.DEVNULL)
+            start_new_session=True, stdin=subprocess.DEVNULL, env={**os.environ, **(env or {})})
         self.stdout = self.stderr = ""
 
     def wait(self) -> int:
@@ -263,3 +264,36 @@ def test_ctrl_c_stops_the_campaign_and_keeps_what_finished(tmp_path):
     assert [c["verdict"] for c in found["cases"]] == ["stopped", "not run", "not run"]
     assert [result for _, result in campaign.testcases()] == ["error", "skipped", "skipped", "failure"]
     assert (campaign.out / found["cases"][0]["folder"] / "summary.json").is_file()
+
+
+def test_every_case_branches_from_one_checkpoint(dask_cluster, tmp_path):
+    subprocess.run([sys.executable, "-m", "hub", "run", str(SCENARIO), "--set", "run.duration=1", "--checkpoint-at",
+                    "0.5", "--out", str(tmp_path / "warm"), "-q"], check=True, capture_output=True, timeout=60)
+    campaign = Campaign(tmp_path, write(tmp_path, """\
+        planthub: 1
+        scenarios: [SCENARIO]
+        matrix:
+          run.duration: [1, 1.5]
+        from: warm/checkpoints/75.ckpt
+        """), "--scheduler", dask_cluster)
+    assert campaign.wait() == 0, campaign.stderr
+    cases = campaign.results()["cases"]
+    assert [c["figures"]["simulated_s"] for c in cases] == [1.0, 1.5]
+    assert all("--resume" in c["command"] for c in cases)
+    # resumed at 0.5 s: the recording starts there
+    first = (campaign.out / cases[0]["folder"] / "recording.csv").read_text().splitlines()[1]
+    assert first.split(",")[0].startswith("0.5")
+
+
+def test_a_scheduler_that_cannot_be_reached_fails_the_campaign_with_its_files(tmp_path):
+    with socket.socket() as unused:   # a port on loopback that nothing listens on
+        unused.bind(("127.0.0.1", 0))
+        port = unused.getsockname()[1]
+    campaign = Campaign(tmp_path, write(tmp_path, SPEEDS), "--scheduler", f"tcp://127.0.0.1:{port}",
+                        env={"DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "1s"})   # Dask's own setting
+    assert campaign.wait() == 1
+    assert f"planthub campaign: cannot reach scheduler tcp://127.0.0.1:{port}: Timed out" in campaign.stderr
+    found = campaign.results()
+    assert found["passed"] is False and found["ended"].startswith("not started: cannot reach scheduler")
+    assert [c["verdict"] for c in found["cases"]] == ["not run"] * 4
+    assert campaign.testcases()[-1] == ("the campaign", "failure")

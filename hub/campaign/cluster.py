@@ -23,7 +23,7 @@ from distributed.scheduler import KilledWorker
 from hub.campaign.case import run_case
 from hub.core.errors import PlanthubError
 
-CONNECT = 30.0   # s to reach a scheduler and, for the embedded cluster, to start it
+CONNECT = 30.0   # s for the embedded cluster to start; an existing scheduler: distributed.comm.timeouts.connect
 CLOSE = 30.0     # s to close the client and the embedded cluster
 
 
@@ -79,21 +79,22 @@ class Cluster:
                                               silence_logs=logging.CRITICAL if self.quiet else logging.WARNING)
                 self.client = Client(self.local, timeout=CONNECT)
             else:
-                self.client = Client(self.scheduler, timeout=CONNECT)
-        except (OSError, TimeoutError) as exc:
+                self.client = Client(self.scheduler)   # waits as long as Dask's configuration says
+        except (OSError, TimeoutError, ValueError) as exc:   # ValueError: an address Dask cannot read
             self.close()
-            where = self.scheduler or "a LocalCluster on 127.0.0.1"
-            raise ClusterError(f"planthub campaign: cannot reach {where}: {exc}") from None
+            raise ClusterError(f"cannot reach {self.where()}: {exc}") from None
         self.stop = Event(self.name, client=self.client)
         return self
 
     def __exit__(self, *exc) -> None:
         self.close()
 
+    def where(self) -> str:
+        return f"scheduler {self.scheduler}" if self.scheduler is not None else "a LocalCluster on 127.0.0.1"
+
     def describe(self) -> str:
         threads = sum(self.client.nthreads().values())
-        where = f"scheduler {self.scheduler}" if self.local is None else "a LocalCluster on 127.0.0.1"
-        return f"{where}: {len(self.client.nthreads())} workers, {threads} cases at once"
+        return f"{self.where()}: {len(self.client.nthreads())} workers, {threads} cases at once"
 
     def slots(self) -> int:
         """How many cases run at once."""

@@ -70,8 +70,8 @@ def table(outcome: Outcome) -> list[str]:
 def write_junit(path: Path, outcome: Outcome, started: datetime) -> None:
     """One <testsuite> for the campaign: a <testcase> per case and expectation, named
     `expectation [case label]`; a case without expectations, or whose run failed before any could
-    be judged, or that was not run, is one case `the run [label]`. An interrupted campaign adds a
-    failed case `the campaign`."""
+    be judged, or that was not run, is one case `the run [label]`. A campaign interrupted or never
+    started adds a failed case `the campaign`."""
     suite_name = f"campaign {outcome.campaign.name}"
     cases = []
     for r in outcome.records:
@@ -84,7 +84,7 @@ def write_junit(path: Path, outcome: Outcome, started: datetime) -> None:
             cases.append((r["name"], f"the run [{r['label']}]", "error", r["reason"], r))
         elif not judged:
             cases.append((r["name"], f"the run [{r['label']}]", "passed", "", r))
-    if outcome.interrupted is not None:
+    if outcome.broken:
         cases.append(("campaign", "the campaign", "failure", outcome.ended, None))
     count = lambda kind: sum(c[2] == kind for c in cases)
     seconds = f"{outcome.wall_seconds:.3f}"

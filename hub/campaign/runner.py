@@ -31,8 +31,13 @@ class Outcome:
     counts: dict = field(default_factory=dict)
 
     @property
+    def broken(self) -> bool:
+        """Whether the campaign itself went wrong (interrupted, or never started), whatever its cases did."""
+        return self.interrupted is not None or self.ended.startswith("not started")
+
+    @property
     def passed(self) -> bool:
-        return self.interrupted is None and all(r["verdict"] == PASSED for r in self.records)
+        return not self.broken and all(r["verdict"] == PASSED for r in self.records)
 
 
 def spec(case: Case, out: Path) -> dict:
@@ -94,6 +99,12 @@ def run_campaign(campaign: Campaign, out: Path, cluster, progress=None) -> Outco
     outcome.wall_seconds = round(time.monotonic() - started, 3)
     outcome.counts = _counts(outcome.records)
     return outcome
+
+
+def not_run(campaign: Campaign, out: Path, where: str, why: str) -> Outcome:
+    """A campaign that could not start (its cluster unreachable): every case not run, saying why."""
+    records = [record(case, out, None, verdict=NOT_RUN, reason=f"not run: {why}") for case in campaign.cases]
+    return Outcome(campaign, out, where, records, f"not started: {why}", counts=_counts(records))
 
 
 def _counts(records) -> dict:

@@ -56,10 +56,10 @@ def _count(text: str) -> int:
 
 
 def _campaign(args) -> int:
-    from hub.campaign.cluster import Cluster
+    from hub.campaign.cluster import Cluster, ClusterError
     from hub.campaign.plan import load_campaign
     from hub.campaign.results import table, write_results
-    from hub.campaign.runner import Terminated, run_campaign
+    from hub.campaign.runner import Terminated, not_run, run_campaign
 
     scratch.sweep()
     campaign = load_campaign(args.file)   # a bad file: exit 3, every problem named
@@ -74,11 +74,15 @@ def _campaign(args) -> int:
         raise Terminated()
 
     previous = signal.signal(signal.SIGTERM, terminate)
+    cluster = Cluster(args.scheduler, args.workers, quiet=verbosity(args) < 1)
     try:
-        with Cluster(args.scheduler, args.workers, quiet=verbosity(args) < 1) as cluster:
+        with cluster:
             _log.info(f"planthub campaign: {len(campaign.cases)} cases on {cluster.describe()}")
             say = (lambda line: None) if verbosity(args) < 0 else None
             outcome = run_campaign(campaign, out, cluster, progress=say)
+    except ClusterError as exc:   # nothing ran; the files say so, as for any campaign that went wrong
+        outcome = not_run(campaign, out, cluster.where(), str(exc))
+        _log.error(f"planthub campaign: {exc}")
     finally:
         signal.signal(signal.SIGTERM, previous)
     write_results(outcome, args.junit, started)
