@@ -1,0 +1,56 @@
+"""A PLC over EtherNet/IP (pylogix's client, as for a ControlLogix) routing the bottling plant through
+`planthub gateway enip`: `python -m tests.plc.enip_plc TAGS.csv HOST:PORT --lanes A,B,C,D,E [--limit S]`.
+It waits for the server (up to --limit s), sets plc_ready, then answers every scan until the server
+goes away, and prints how many scans and decisions it made. Tags by name, as a Logix program has them."""
+from __future__ import annotations
+
+import sys
+import time
+
+from pylogix import PLC
+
+from tests.plc.routing import Routing, arguments
+
+
+def main(args) -> int:
+    host, port = args.endpoint.rsplit(":", 1)
+    lanes = args.lanes.split(",")
+    pairs = range(1, len(lanes) + 1)
+    commands = [f"sw{i}_{kind}" for i in pairs for kind in ("work", "base")]
+    routing, last, scans = Routing(lanes), 0, 0
+    deadline = time.monotonic() + args.limit
+    with PLC(host) as plc:
+        plc.Port, plc.SocketTimeout = int(port), 5.0
+        while plc.Write("plc_ready", True).Status != "Success":
+            if time.monotonic() > deadline:
+                print(f"no EtherNet/IP server at {args.endpoint} within {args.limit:g} s", file=sys.stderr)
+                return 1
+            time.sleep(0.1)
+        try:
+            while time.monotonic() < deadline:
+                values = plc.Read(["cycle"] + [f"r{i}_read" for i in pairs])
+                if values[0].Status != "Success":
+                    break   # the gateway stopped with the run
+                cycle = values[0].Value
+                if cycle == last:
+                    time.sleep(0.01)   # each request costs the gateway ms of CPU: poll gently
+                    continue
+                counts = [v.Value for v in values[1:]]
+                # a string only when its reader saw a bottle (pylogix 1.1.6 reads an SSTRING right only alone)
+                destinations = [plc.Read(f"r{i}_destination").Value if counts[i - 1] != routing.seen[i - 1] else ""
+                                for i in pairs]
+                bits = routing.scan(counts, destinations)
+                plc.Write([(c, bits[c]) for c in commands] + [("cycle_done", cycle)])
+                last, scans = cycle, scans + 1
+            else:
+                print(f"gave up after {args.limit:g} s", file=sys.stderr)
+                return 1
+        except (OSError, AttributeError, TypeError):
+            pass   # the gateway stopped with the run
+        finally:
+            print(f"scans {scans} decisions {routing.decisions}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(arguments(__doc__)))
