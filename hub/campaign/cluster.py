@@ -83,6 +83,9 @@ class Cluster:
         except (OSError, TimeoutError, ValueError) as exc:   # ValueError: an address Dask cannot read
             self.close()
             raise ClusterError(f"cannot reach {self.where()}: {exc}") from None
+        except BaseException:   # a Ctrl-C while the cluster starts: what started of it is stopped
+            self.close()
+            raise
         self.stop = Event(self.name, client=self.client)
         return self
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import itertools
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import jsonschema
@@ -147,7 +147,7 @@ class _Checker:
                     expect = tuple(own_expect if isinstance(own_expect, list) else []) + tuple(data.get("expect", []))
                     case = Case(len(cases), scenario, scenario.stem, parameters, expect, time_limit, resume)
                     name = self.check_case(case, n, entry, len(own_expect) if isinstance(own_expect, list) else 0)
-                    cases.append(Case(case.index, scenario, name, parameters, expect, time_limit, resume))
+                    cases.append(replace(case, scenario_name=name))
         if self.problems:
             raise CampaignError(self.problems)
         return Campaign(self.path, data.get("name", self.path.stem), tuple(cases))
@@ -177,9 +177,9 @@ class _Checker:
                 place = self.value_place(key, value)
                 return place, f"{where}{problem.path}: {problem.message}"
         if problem.path.startswith("expect["):
-            n = int(problem.path[len("expect["):problem.path.index("]")])
-            if n >= own_count:
-                return ("expect", n - own_count), f"{where}{problem.path}: {problem.message}"
+            k = int(problem.path[len("expect["):problem.path.index("]")])
+            if k >= own_count:   # one of the campaign's, after the scenario's own
+                return ("expect", k - own_count), f"{where}{problem.path}: {problem.message}"
         return ("scenarios", n), f"{where}{problem}"
 
     def value_place(self, key: str, value) -> tuple:

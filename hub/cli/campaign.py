@@ -73,6 +73,12 @@ def _campaign(args) -> int:
     def terminate(signum, frame):
         raise Terminated()
 
+    if not campaign.cases:   # --only-failed after a campaign that passed
+        from hub.campaign.runner import Outcome
+
+        write_results(Outcome(campaign, out, "no cluster", [], "no case to run"), args.junit, started)
+        print(f"planthub campaign {campaign.name}: no case to run")
+        return OK
     previous = signal.signal(signal.SIGTERM, terminate)
     cluster = Cluster(args.scheduler, args.workers, quiet=verbosity(args) < 1)
     try:
