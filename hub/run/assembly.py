@@ -88,6 +88,7 @@ class Run:
             if bus is not None or slaves:
                 self.link = BusLink(plant, self.recorder, slaves, bus, commands, log=self.log,
                                     looks=self.contributed, figures=lambda: self.figures)
+                self.link.logs = self.out   # what launched participants said is kept beside the run's files
             # The scenario's expectations are watched in every run, so that a checkpoint carries
             # what they saw whichever command took it and whichever resumes it.
             self.watcher = Watcher([e for e in scenario.expect if isinstance(e, Expectation)], plant.index, rate)
@@ -178,8 +179,6 @@ class Run:
         if self._closed:
             return
         self._closed = True
-        if self.out is not None and self.lockstep is not None:
-            self.lockstep.logs = self.out   # what launched participants said is kept beside the run's files
         try:
             self.master.close(reason)
             if self.out is not None:

@@ -57,6 +57,7 @@ class BusLink:
             live.listen(self.bus, run)
         self.lockstep = Lockstep(self.bus, run, self.slaves, lease=settings.lease, on_loss=settings.on_loss,
                                  rate=plant.world.rate, log=self._notice, warn=self.log)
+        self.lockstep.logs = getattr(self, "logs", None)   # the run's folder (hub/run/assembly.py sets it)
         self.lockstep.start(plant.world.tick)
         return live
 

@@ -1,0 +1,78 @@
+"""What a gateway tells when its PLC is missing or silent: a PLC that never sets plc_ready ends the
+gateway's wait inside the hub's join wait, and the run's error names plc_ready and the endpoint;
+what the launched gateway said is on the hub's console and in the run folder; the OPC UA browse
+names are in the plant's namespace, so a client's get_child finds them."""
+import asyncio
+import subprocess
+import sys
+
+from asyncua import Client
+
+from hub.gateway.image import ProcessImage
+from hub.gateway.opcua import OpcUaServer
+from hub.gateway.server_thread import ServerThread
+from hub.gateway.tags import tag_map
+from hub.scenario.checker import load_scenario
+
+from .gateway_support import free_port
+from .helpers import ROOT
+from .test_gateway import belt_scenario
+
+
+def test_a_plc_that_never_sets_plc_ready_is_named_with_the_endpoint_before_the_hub_gives_up(tmp_path):
+    endpoint = f"127.0.0.1:{free_port()}"
+    path = belt_scenario(tmp_path, launch=["hub", "gateway", "s7", "belt_plc.yaml", "--object", "plc",
+                                           "--endpoint", endpoint])
+    path.write_text(path.read_text().replace("    python:", "    join_timeout: 6\n    python:"))
+    proc = subprocess.run([sys.executable, "-m", "hub", "run", str(path), "--out", str(tmp_path / "run")],
+                          capture_output=True, text=True, cwd=ROOT, timeout=120)
+    said = proc.stdout + proc.stderr
+    assert proc.returncode == 1 and "Traceback" not in said
+    assert "participant 'plc': its process exited with code 1 before it could join" in said
+    assert (f"no PLC set plc_ready within" in said and
+            f"(plc_ready is M0.0 of the s7 server at {endpoint}); the PLC sets it once it runs" in said)
+    assert "no PLC set plc_ready" in (tmp_path / "run" / "plc.log").read_text()   # kept in the run folder
+
+
+def test_the_launched_gateways_refusals_reach_the_hub_console_and_the_run_folder(tmp_path):
+    port = free_port()
+    path = belt_scenario(tmp_path, launch=["hub", "gateway", "s7", "belt_plc.yaml", "--object", "plc",
+                                           "--endpoint", f"127.0.0.1:{port}", "--sync", "live"])
+    writer = ("import snap7, time\n"
+              "from snap7.type import Area\n"
+              "c = snap7.Client(); deadline = time.monotonic() + 60\n"
+              "while True:\n"
+              "    try:\n"
+              "        c.connect('127.0.0.1', 0, 1, %d); break\n"
+              "    except Exception:\n"
+              "        assert time.monotonic() < deadline; time.sleep(0.1)\n"
+              "try:\n"
+              "    c.write_area(Area.PE, 0, 0, bytearray([1]))\n"
+              "except Exception:\n"
+              "    pass\n"
+              "c.disconnect()\n") % port
+    client = subprocess.Popen([sys.executable, "-c", writer], cwd=ROOT)
+    try:
+        proc = subprocess.run([sys.executable, "-m", "hub", "run", str(path), "--realtime", "--out", str(tmp_path / "run")],
+                              capture_output=True, text=True, cwd=ROOT, timeout=120)
+    finally:
+        client.wait(timeout=60)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    refusal = "refused a write to occupied at I0.0 (S7): 0x03 object access not allowed: a PLC input is read-only"
+    assert refusal in proc.stderr and "participant 'plc' said (all" in proc.stderr
+    assert refusal in (tmp_path / "run" / "plc.log").read_text()
+
+
+def test_opc_ua_browse_names_are_in_the_plants_namespace(tmp_path):
+    tags = tag_map(load_scenario(belt_scenario(tmp_path)), "plc", None)
+    endpoint = f"opc.tcp://127.0.0.1:{free_port()}/planthub"
+
+    async def browse():
+        async with Client(endpoint, timeout=5) as client:
+            ns = await client.get_namespace_index("urn:planthub:belt_plc")
+            node = await client.nodes.objects.get_child([f"{ns}:belt_plc", f"{ns}:belt", f"{ns}:speed"])
+            return ns, (await node.read_browse_name()).NamespaceIndex
+
+    with ServerThread(OpcUaServer(ProcessImage(tags), endpoint), "opcua"):
+        ns, found = asyncio.run(browse())
+    assert found == ns != 0
