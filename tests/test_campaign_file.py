@@ -1,6 +1,7 @@
 """Campaign files (hub/campaign/plan.py): the cases a matrix, `zip` and seeds make, and every mistake named with file and line."""
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import textwrap
@@ -133,3 +134,37 @@ def test_not_yaml_and_the_command_lines_exit_code(tmp_path):
     assert done.returncode == 3
     assert f"{path}:3: not valid YAML" in done.stderr
     assert not (tmp_path / "out").exists()
+
+
+def campaign_command(tmp_path, *options: str) -> subprocess.CompletedProcess:
+    path = write(tmp_path, "planthub: 1\nscenarios: [SCENARIO]\nseeds: 2\n")
+    return subprocess.run([sys.executable, "-m", "hub", "campaign", str(path), *options], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=60)
+
+
+def test_only_failed_needs_an_earlier_campaigns_results(tmp_path):
+    done = campaign_command(tmp_path, "--out", "again", "--only-failed", "nowhere")
+    assert done.returncode == 2
+    assert ("--only-failed nowhere: cannot read the earlier campaign's results nowhere/campaign.json: "
+            "No such file or directory") in done.stderr
+    (tmp_path / "earlier").mkdir()
+    (tmp_path / "earlier" / "campaign.json").write_text("{}")
+    done = campaign_command(tmp_path, "--out", "earlier", "--only-failed", "earlier")
+    assert done.returncode == 2
+    assert "--out earlier is the campaign whose failures are run again; write them elsewhere" in done.stderr
+    done = campaign_command(tmp_path, "--out", "again", "--only-failed", "earlier")
+    assert done.returncode == 2
+    assert ("--only-failed earlier: earlier/campaign.json is no campaign's results (`planthub campaign --out`): "
+            "no list of cases with their label and verdict") in done.stderr
+
+
+def test_only_failed_after_a_campaign_that_passed_runs_nothing(tmp_path):
+    (tmp_path / "earlier").mkdir()
+    labels = [f"belt_bottle_sensor[run.seed={seed}]" for seed in (0, 1)]
+    (tmp_path / "earlier" / "campaign.json").write_text(
+        json.dumps({"cases": [{"label": label, "verdict": "passed"} for label in labels]}))
+    done = campaign_command(tmp_path, "--out", "again", "--only-failed", "earlier", "--junit", "again.xml")
+    assert done.returncode == 0, done.stderr
+    assert "planthub campaign campaign: no case to run" in done.stdout
+    assert json.loads((tmp_path / "again" / "campaign.json").read_text())["cases"] == []
+    assert (tmp_path / "again.xml").is_file()

@@ -63,11 +63,11 @@ def _campaign(args) -> int:
 
     scratch.sweep()
     campaign = load_campaign(args.file)   # a bad file: exit 3, every problem named
-    if args.only_failed is not None:
-        campaign = _only_failed(campaign, args.only_failed)
     out = args.out or Path("runs") / f"campaign_{campaign.name}"
-    if args.only_failed is not None and out.resolve() == args.only_failed.resolve():
-        raise UsageError(f"--out {out} is the campaign whose failures are run again; write them elsewhere")
+    if args.only_failed is not None:
+        if out.resolve() == args.only_failed.resolve():
+            raise UsageError(f"--out {out} is the campaign whose failures are run again; write them elsewhere")
+        campaign = _only_failed(campaign, args.only_failed)
     started = datetime.now().replace(microsecond=0)
 
     def terminate(signum, frame):
@@ -105,9 +105,14 @@ def _only_failed(campaign, folder: Path):
     path = folder / "campaign.json"
     try:
         earlier = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise UsageError(f"--only-failed {folder}: cannot read the earlier campaign's results {path}: "
+                         f"{getattr(exc, 'strerror', None) or exc}") from None
+    try:
         failed = {case["label"] for case in earlier["cases"] if case["verdict"] != "passed"}
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise UsageError(f"--only-failed {folder}: cannot read the earlier campaign's results {path}: {exc}") from None
+    except (KeyError, TypeError):
+        raise UsageError(f"--only-failed {folder}: {path} is no campaign's results (`planthub campaign --out`): "
+                         "no list of cases with their label and verdict") from None
     cases = tuple(case for case in campaign.cases if case.label in failed)
     unknown = failed - {case.label for case in cases}
     if unknown:
