@@ -1,6 +1,6 @@
 """What a PLC over the gateway costs the bottling plant: its first 56 s routed by the routing
-participant over Zenoh (the floor: `make run`'s set-up), and by a PLC client process over OPC UA and
-over Modbus TCP in lockstep — answering every communication step, and scanning every 0.1 s.
+participant over Zenoh (the floor: `make run`'s set-up), and by a PLC client process over OPC UA,
+Modbus TCP, S7 and EtherNet/IP in lockstep — answering every communication step, and scanning every 0.1 s.
 Alternated, medians of REPEATS; real-time factors from each run's summary. `python -m tests.bench_gateway`."""
 from __future__ import annotations
 
@@ -16,7 +16,11 @@ WAYS = [("routing participant over Zenoh (floor)", None, ()),
         ("OPC UA, lockstep, a scan every step", "opcua", ()),
         ("Modbus TCP, lockstep, a scan every step", "modbus", ()),
         ("OPC UA, lockstep, a scan every 0.1 s", "opcua", ("--scan", "0.1")),
-        ("Modbus TCP, lockstep, a scan every 0.1 s", "modbus", ("--scan", "0.1"))]
+        ("Modbus TCP, lockstep, a scan every 0.1 s", "modbus", ("--scan", "0.1")),
+        ("S7, lockstep, a scan every step", "s7", ()),
+        ("S7, lockstep, a scan every 0.1 s", "s7", ("--scan", "0.1")),
+        # (cpppo parses each request in Python: a scan every step would take minutes)
+        ("EtherNet/IP, lockstep, a scan every 0.1 s", "enip", ("--scan", "0.1"))]
 
 
 def gateway() -> dict:
