@@ -191,11 +191,40 @@ def dask_cluster(tmp_path_factory):
         worker = subprocess.Popen([dask, "worker", address, "--host", "127.0.0.1", "--nthreads", "1",
                                    "--no-dashboard"], cwd=folder, start_new_session=True,
                                   stdout=subprocess.DEVNULL, stderr=open(folder / "worker.log", "w"))
+        deadline = time.monotonic() + 30
+        while "Registered to" not in (folder / "worker.log").read_text() and time.monotonic() < deadline:
+            time.sleep(0.1)   # the worker has joined: a campaign sees it from its start
+        assert "Registered to" in (folder / "worker.log").read_text(), (folder / "worker.log").read_text()
         yield address
     finally:
         for process in (worker, scheduler):
             if process is not None:
                 stop(process)
+
+
+def test_a_scheduler_without_workers_ends_the_campaign_not_run(tmp_path):
+    from hub.campaign.cluster import Cluster
+    from hub.campaign.plan import load_campaign
+    from hub.campaign.runner import run_campaign
+
+    file = tmp_path / "scheduler.json"
+    scheduler = start([str(Path(sys.executable).with_name("dask")), "scheduler", "--host", "127.0.0.1", "--port", "0",
+                       "--no-dashboard", "--scheduler-file", str(file)], tmp_path)
+    try:
+        deadline = time.monotonic() + 30
+        while not file.is_file() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        address = json.loads(file.read_text())["address"]
+        lines = []
+        with Cluster(address) as cluster:
+            outcome = run_campaign(load_campaign(write(tmp_path, SPEEDS)), tmp_path / "out", cluster,
+                                   progress=lines.append, no_workers=1)
+    finally:
+        stop(scheduler)
+    assert not outcome.passed and outcome.interrupted is None
+    assert outcome.ended == "no worker in the cluster for 1 s after 0 of 4 cases"
+    assert [r["reason"] for r in outcome.records] == ["not run: no worker in the cluster for 1 s"] * 4
+    assert lines == ["campaign: no worker in the cluster for 1 s: stopping the running cases (up to 15 s)"]
 
 
 def test_a_campaign_on_a_scheduler_and_worker_of_dasks_command_line(dask_cluster, local, tmp_path):

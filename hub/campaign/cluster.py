@@ -100,8 +100,8 @@ class Cluster:
         return f"{self.where()}: {len(self.client.nthreads())} workers, {threads} cases at once"
 
     def slots(self) -> int:
-        """How many cases run at once."""
-        return max(1, sum(self.client.nthreads().values()))
+        """How many cases run at once now (0: the cluster has no worker)."""
+        return sum(self.client.nthreads().values())
 
     def submit(self, index: int, spec: dict, attempt: int = 1) -> None:
         future = self.client.submit(_task, spec, self.name, key=f"{self.name}-case{index}-try{attempt}", pure=False)
@@ -143,21 +143,20 @@ class Cluster:
         return sorted(out, key=lambda f: f.index)
 
     def stop_cases(self, limit: float) -> list[Finished]:
-        """Stop every case: the running ones end (their files written), the waiting ones are
-        cancelled. What came back within `limit` s."""
+        """Stop every case: those handed to a worker end (a running one writes its files), the others
+        are cancelled at once. What came back within `limit` s."""
         self.stop.set()
+        handed = {key for keys in self.client.processing().values() for key in keys}
+        self.client.cancel([f for f in self.pending if f.key not in handed])
         try:
-            wait(list(self.pending), timeout=limit)
+            wait([f for f in self.pending if f.key in handed], timeout=limit)
         except TimeoutError:
             pass
         ended = []
         for future in list(self.pending):
-            if future.done():
+            if future.done() and future.status == "finished":
                 index, spec, attempt = self.pending.pop(future)
-                try:
-                    ended.append(Finished(index, future.result(), None, attempt))
-                except Exception:   # noqa: BLE001 — a lost or cancelled case is reported as not run
-                    pass
+                ended.append(Finished(index, future.result(), None, attempt))
         self.client.cancel(list(self.pending))
         return ended
 

@@ -19,10 +19,10 @@ VARYING = ("wall_seconds", "host")
 def write_results(outcome: Outcome, junit: Path | None, started: datetime) -> None:
     out = outcome.out
     out.mkdir(parents=True, exist_ok=True)
-    data = {"campaign": outcome.campaign.name, "file": str(outcome.campaign.path), "started": started.isoformat(timespec="seconds"),
-            "cluster": outcome.cluster, "ended": outcome.ended, "passed": outcome.passed,
-            "interrupted": outcome.interrupted, "wall_seconds": outcome.wall_seconds, "counts": outcome.counts,
-            "cases": outcome.records}
+    data = {"campaign": outcome.campaign.name, "file": str(outcome.campaign.path),
+            "started": started.isoformat(timespec="seconds"), "cluster": outcome.cluster, "ended": outcome.ended,
+            "passed": outcome.passed, "interrupted": outcome.interrupted, "broken": outcome.broken,
+            "wall_seconds": outcome.wall_seconds, "counts": outcome.counts, "cases": outcome.records}
     _atomic(out / "campaign.json", json.dumps(data, indent=1, ensure_ascii=False) + "\n")
     _write_table(out / "cases.csv", outcome.records)
     if junit is not None:
@@ -70,8 +70,8 @@ def table(outcome: Outcome) -> list[str]:
 def write_junit(path: Path, outcome: Outcome, started: datetime) -> None:
     """One <testsuite> for the campaign: a <testcase> per case and expectation, named
     `expectation [case label]`; a case without expectations, or whose run failed before any could
-    be judged, or that was not run, is one case `the run [label]`. A campaign interrupted or never
-    started adds a failed case `the campaign`."""
+    be judged, or that was not run, is one case `the run [label]`. A campaign that went wrong itself
+    (interrupted, never started, left without workers) adds a failed case `the campaign`."""
     suite_name = f"campaign {outcome.campaign.name}"
     cases = []
     for r in outcome.records:
@@ -84,7 +84,7 @@ def write_junit(path: Path, outcome: Outcome, started: datetime) -> None:
             cases.append((r["name"], f"the run [{r['label']}]", "error", r["reason"], r))
         elif not judged:
             cases.append((r["name"], f"the run [{r['label']}]", "passed", "", r))
-    if outcome.broken:
+    if outcome.broken is not None:
         cases.append(("campaign", "the campaign", "failure", outcome.ended, None))
     count = lambda kind: sum(c[2] == kind for c in cases)
     seconds = f"{outcome.wall_seconds:.3f}"

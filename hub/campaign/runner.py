@@ -10,6 +10,7 @@ from hub.campaign.case import GRACE, LOST, NOT_RUN, PASSED, STOPPED, command
 from hub.campaign.plan import Campaign, Case
 
 TICK = 1.0   # s between looks at the cluster while nothing finishes
+NO_WORKERS = 60.0   # s a campaign waits for a cluster without workers to get one
 
 
 class Terminated(KeyboardInterrupt):
@@ -27,17 +28,13 @@ class Outcome:
     records: list[dict]
     ended: str
     interrupted: str | None = None     # "SIGINT" or "SIGTERM"
+    broken: str | None = None          # why the campaign itself went wrong (interrupted, no cluster, no worker)
     wall_seconds: float = 0.0
     counts: dict = field(default_factory=dict)
 
     @property
-    def broken(self) -> bool:
-        """Whether the campaign itself went wrong (interrupted, or never started), whatever its cases did."""
-        return self.interrupted is not None or self.ended.startswith("not started")
-
-    @property
     def passed(self) -> bool:
-        return not self.broken and all(r["verdict"] == PASSED for r in self.records)
+        return self.broken is None and all(r["verdict"] == PASSED for r in self.records)
 
 
 def spec(case: Case, out: Path) -> dict:
@@ -62,10 +59,11 @@ def record(case: Case, out: Path, result: dict | None, *, verdict: str | None = 
     return found
 
 
-def run_campaign(campaign: Campaign, out: Path, cluster, progress=None) -> Outcome:
+def run_campaign(campaign: Campaign, out: Path, cluster, progress=None, no_workers: float = NO_WORKERS) -> Outcome:
     """Every case on `cluster` (hub/campaign/cluster.py, entered); `progress(line)` hears of each
-    finished case with the campaign's counts. A KeyboardInterrupt (Ctrl-C, Terminated) stops the
-    running cases, keeps what finished and marks the rest."""
+    finished case with the campaign's counts. A KeyboardInterrupt (Ctrl-C, Terminated), or a
+    cluster without a worker for `no_workers` s, stops the running cases, keeps what finished and
+    marks the rest not run."""
     progress = progress or (lambda line: print(line, file=sys.stderr, flush=True))
     started = time.monotonic()
     cases = {case.index: case for case in campaign.cases}
@@ -74,6 +72,7 @@ def run_campaign(campaign: Campaign, out: Path, cluster, progress=None) -> Outco
     try:
         for case in campaign.cases:
             cluster.submit(case.index, spec(case, out))
+        alone = None   # since when the cluster has had no worker
         while len(records) < len(cases):
             for done in cluster.finished(TICK):
                 case = cases[done.index]
@@ -82,19 +81,23 @@ def run_campaign(campaign: Campaign, out: Path, cluster, progress=None) -> Outco
                 else:
                     records[done.index] = record(case, out, done.result, attempts=done.attempt)
                 progress(_line(records[done.index], records, len(cases), cluster, started))
+            alone = (alone or time.monotonic()) if cluster.slots() == 0 else None
+            if alone is not None and time.monotonic() - alone > no_workers:
+                outcome.broken = f"no worker in the cluster for {no_workers:g} s"
+                break
     except KeyboardInterrupt as exc:
         outcome.interrupted = "SIGTERM" if isinstance(exc, Terminated) else "SIGINT"
-        progress(f"campaign: interrupted ({outcome.interrupted}): stopping the running cases "
-                 f"(up to {GRACE + 5:g} s)")
+        outcome.broken = f"interrupted ({outcome.interrupted})"
+    if outcome.broken is not None:
+        progress(f"campaign: {outcome.broken}: stopping the running cases (up to {GRACE + 5:g} s)")
         for done in cluster.stop_cases(GRACE + 5):
             if done.result is not None:
                 records[done.index] = record(cases[done.index], out, done.result, attempts=done.attempt)
         for index, case in cases.items():
             if index not in records:
-                records[index] = record(case, out, None, verdict=NOT_RUN,
-                                        reason=f"not run: the campaign was interrupted ({outcome.interrupted})")
+                records[index] = record(case, out, None, verdict=NOT_RUN, reason=f"not run: {outcome.broken}")
         ran = sum(r["verdict"] not in (NOT_RUN, STOPPED) for r in records.values())
-        outcome.ended = f"interrupted ({outcome.interrupted}) after {ran} of {len(cases)} cases"
+        outcome.ended = f"{outcome.broken} after {ran} of {len(cases)} cases"
     outcome.records = [records[i] for i in sorted(records)]
     outcome.wall_seconds = round(time.monotonic() - started, 3)
     outcome.counts = _counts(outcome.records)
@@ -104,7 +107,8 @@ def run_campaign(campaign: Campaign, out: Path, cluster, progress=None) -> Outco
 def not_run(campaign: Campaign, out: Path, where: str, why: str) -> Outcome:
     """A campaign that could not start (its cluster unreachable): every case not run, saying why."""
     records = [record(case, out, None, verdict=NOT_RUN, reason=f"not run: {why}") for case in campaign.cases]
-    return Outcome(campaign, out, where, records, f"not started: {why}", counts=_counts(records))
+    return Outcome(campaign, out, where, records, f"not started: {why}", broken=f"not started: {why}",
+                   counts=_counts(records))
 
 
 def _counts(records) -> dict:
