@@ -260,6 +260,21 @@ def test_a_worker_killed_mid_case_has_its_case_run_again_elsewhere(tmp_path):
     assert case["reason"] == "run again after its worker died (attempt 2)"
 
 
+def test_a_case_that_crashes_is_that_cases_failure_with_its_reason(tmp_path):
+    campaign = Campaign(tmp_path, long_case(tmp_path, time_limit=60, count=2), "--workers", "1")
+    try:
+        case_child(campaign.out).kill()   # as a segfault in an FMU's code would end it, with nothing written
+    finally:
+        code = campaign.wait()
+    assert code == 1, campaign.stderr
+    crashed, other = campaign.results()["cases"]
+    assert crashed["verdict"] == "crashed" and crashed["attempts"] == 1
+    assert crashed["reason"].startswith("the run was killed by SIGKILL")
+    assert other["verdict"] == "passed"   # the worker went on with the next case
+    assert campaign.testcases()[0] == ("the run [belt_bottle_sensor[objects.belt.speed=0, run.duration=600, "
+                                       "run.seed=0]]", "error")
+
+
 def test_a_case_that_hangs_is_stopped_at_its_time_limit(tmp_path):
     campaign = Campaign(tmp_path, long_case(tmp_path, time_limit=2, duration=100000), "--workers", "1")
     assert campaign.wait() == 1, campaign.stderr
