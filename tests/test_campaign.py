@@ -341,3 +341,28 @@ def test_a_scheduler_that_cannot_be_reached_fails_the_campaign_with_its_files(tm
     assert found["passed"] is False and found["ended"].startswith("not started: cannot reach scheduler")
     assert [c["verdict"] for c in found["cases"]] == ["not run"] * 4
     assert campaign.testcases()[-1] == ("the campaign", "failure")
+
+
+def test_a_figure_plotted_against_a_parameter(local, tmp_path, capsys):
+    from hub.cli.main import main
+
+    out = tmp_path / "speeds.png"
+    assert main(["plot", str(local.out), "simulated_s", "wall_s", "--against", "objects.belt.speed",
+                 "--out", str(out)]) == 0
+    assert capsys.readouterr().out.strip() == str(out)
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    for argv, message in (
+            (["simulated", "--against", "run.seed"], "simulated: no such figure in {out}/campaign.json (did you mean 'simulated_s'?); its figures: "
+                            "events, simulated_s, wall_s"),
+            (["simulated_s", "--against", "objects.belt.sped"],
+             "--against objects.belt.sped: the campaign does not vary it (did you mean 'objects.belt.speed'?)"),
+            (["simulated_s", "--against", "objects.belt.speed", "--out", str(tmp_path / "x.svg")],
+             f"--out {tmp_path / 'x.svg'}: planthub plot writes a PNG, so name a .png file")):
+        assert main(["plot", str(local.out), *argv]) == 2
+        assert message.format(out=local.out) in capsys.readouterr().err
+    assert main(["plot", str(local.out), "simulated_s"]) == 2
+    assert (f"{local.out} holds a campaign: say which parameter goes along the x axis with --against KEY "
+            "(objects.belt.speed, run.duration, run.seed)") in capsys.readouterr().err
+    case = local.out / "cases" / "000-belt_bottle_sensor"
+    assert main(["plot", str(case), "bottle.body.position", "--against", "run.seed"]) == 2
+    assert f"--against run.seed: {case} is no campaign's folder (it has no campaign.json)" in capsys.readouterr().err

@@ -32,10 +32,12 @@ def add_command(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str =
         help="draw recorded slots over time as a PNG, from a run folder's recording.csv",
         description="Draw recorded slots over time from RUN_DIR/recording.csv (the folder `planthub run --out`\n"
                     "wrote): one panel per slot on a shared time axis, a vec3 or quat slot's components in one\n"
-                    "panel, bools, counts and names as steps. Prints the PNG's path.",
+                    "panel, bools, counts and names as steps. Prints the PNG's path. Given a campaign's folder\n"
+                    "(`planthub campaign --out`), draws its figures (SLOT: a figure of cases.csv, or wall_s)\n"
+                    "against the parameter --against KEY, a line per combination of the other parameters.",
         epilog="example:\n  planthub plot runs/stop_at_barrier bottle.body.position.x belt.drive.running "
                "--events 'barrier.*'\n  planthub plot runs/bottling_plant 'sink_*.count.total' --from 60 --to 120 "
-               "--out sinks.png\n\n" + epilog)
+               "--out sinks.png\n  planthub plot runs/speeds plant.delivered --against objects.belt.speed\n\n" + epilog)
     plot.add_argument("run", type=Path, metavar="RUN_DIR", help="a run folder: what `planthub run --out DIR` wrote")
     plot.add_argument("slots", nargs="+", metavar="SLOT",
                       help="a recorded slot, object.component.slot (a vec3's components together, or one: "
@@ -43,6 +45,8 @@ def add_command(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str =
     plot.add_argument("--out", type=Path, metavar="FILE.png", help="the PNG to write (default: RUN_DIR/plot.png)")
     plot.add_argument("--from", dest="start", type=seconds_argument, metavar="T", help="s: draw from this time on")
     plot.add_argument("--to", dest="end", type=seconds_argument, metavar="T", help="s: draw up to this time")
+    plot.add_argument("--against", metavar="KEY",
+                      help="with a campaign's folder: the parameter along the x axis (a --set key of its matrix)")
     plot.add_argument("--events", action="append", default=[], metavar="PATTERN",
                       help="also mark the times of the events in events.csv whose slot matches, a name or a glob "
                            "('barrier.trigger.*'); repeatable")
@@ -58,8 +62,13 @@ class Slot:
 
 
 def _plot(args) -> int:
+    from hub.cli.campaign_plot import is_campaign, plot_campaign
     from hub.reports.plots import Line, Panel, draw
 
+    if is_campaign(args.run):
+        return plot_campaign(args)
+    if args.against is not None:
+        raise UsageError(f"--against {args.against}: {args.run} is no campaign's folder (it has no campaign.json)")
     recording = recording_of(args.run)
     out = args.out or args.run / "plot.png"
     if out.suffix.lower() != ".png":
