@@ -168,3 +168,26 @@ def test_only_failed_after_a_campaign_that_passed_runs_nothing(tmp_path):
     assert "planthub campaign campaign: no case to run" in done.stdout
     assert json.loads((tmp_path / "again" / "campaign.json").read_text())["cases"] == []
     assert (tmp_path / "again.xml").is_file()
+
+
+def test_cases_that_do_not_fit_the_checkpoint_they_branch_from(tmp_path):
+    subprocess.run([sys.executable, "-m", "hub", "run", str(SCENARIO), "--set", "run.duration=1", "--checkpoint-at",
+                    "0.5", "--out", str(tmp_path / "warm"), "-q"], check=True, capture_output=True, timeout=60)
+    text = problems(tmp_path, """\
+        planthub: 1
+        scenarios: [SCENARIO]
+        matrix:
+          run.duration: [1, 1.5]
+          objects.belt.speed: [0.5, 0.3]
+        seeds: [0, 1]
+        from: warm/checkpoints/75.ckpt
+        """)
+    fixed = ("changes the plant: the checkpoint `from:` was taken of 'belt_bottle_sensor' as it was (only the "
+             "duration, the expectations, the recording, the logic's parameters and where logic runs may differ)")
+    assert f"campaign.yaml:5: matrix.objects.belt.speed[1]: objects.belt.speed=0.3 {fixed}" in text
+    assert f"campaign.yaml:6: seeds: run.seed=1 {fixed}" in text
+    assert "problems in campaign" in text and text.count(fixed) == 2   # the speed and the seed, whatever the duration
+    (tmp_path / "bad.ckpt").write_text("bad")
+    text = problems(tmp_path, "planthub: 1\nscenarios: [SCENARIO]\nfrom: bad.ckpt\n")
+    assert ("campaign.yaml:3: from: bad.ckpt: not a planthub checkpoint (it does not start with "
+            "'planthub checkpoint')") in text

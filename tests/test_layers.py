@@ -25,7 +25,7 @@ ALLOWED = {
     "run": {"core", "bus", "scenario", "physics", "logic", "view"},
     "reports": {"core", "scenario", "physics", "run"},
     "gateway": {"core", "bus", "scenario"},
-    "campaign": {"core", "scenario"},
+    "campaign": {"core", "scenario", "run"},
     "cli": {"core", "bus", "scenario", "physics", "logic", "run", "reports", "view", "gateway", "campaign"},
 }
 #: files at the top of hub/: the public names users write, and what each stands for

@@ -8,9 +8,10 @@ from pathlib import Path
 
 import jsonschema
 
-from hub.core.errors import Problem, ScenarioError, format_path
+from hub.core.errors import CheckpointError, Problem, ScenarioError, format_path
 from hub.core.registry import did_you_mean
 from hub.core.resources import SCHEMAS
+from hub.run import checkpoint
 from hub.scenario.checker import load_scenario
 from hub.scenario.yamlsource import line_of, load_yaml
 
@@ -124,11 +125,16 @@ class _Checker:
             self.problem((where, "run.seed"), "run.seed is given by `seeds` too: give the seeds in one place")
         if self.problems:   # cases of a matrix that does not hold together would only repeat it
             raise CampaignError(self.problems)
-        resume = None
+        resume = self.checkpoint = None
         if "from" in data:
             resume = (base / data["from"]).resolve()
             if not resume.is_file():
                 self.problem(("from",), f"no checkpoint file {data['from']!r} (looked for {resume})")
+            else:
+                try:
+                    self.checkpoint, _ = checkpoint.header(checkpoint.read(resume), data["from"])
+                except CheckpointError as exc:
+                    self.problem(("from",), str(exc))
         seeds = data.get("seeds")
         seeds = list(range(seeds)) if isinstance(seeds, int) else seeds
         combos = self.combinations(matrix, zipped)
@@ -164,11 +170,34 @@ class _Checker:
         """Load the case's scenario with its values; its problems reported at the campaign's line
         that caused them (a matrix value, an expectation) where one did. The scenario's name."""
         try:
-            return load_scenario(case.scenario, case.overrides()).name
+            scenario = load_scenario(case.scenario, case.overrides())
         except ScenarioError as exc:
             for problem in exc.problems:
                 self.problem(*self.cause(problem, case, n, entry, own_count))
             return case.scenario.stem
+        if self.checkpoint is not None and checkpoint.fingerprint(scenario) != self.checkpoint.fingerprint:
+            self.misfit(case)
+        return scenario.name
+
+    def misfit(self, case: Case) -> None:
+        """A case whose plant is not the one `from:`'s checkpoint was taken of: named at the values
+        that change it, each tried alone on the scenario."""
+        head = self.checkpoint
+        fixed = (f"the checkpoint `from:` was taken of {head.scenario!r} as it was (only the duration, the "
+                 "expectations, the recording, the logic's parameters and where logic runs may differ)")
+        culprits = [(key, value) for key, value in case.parameters if self.changes(case.scenario, key, value)]
+        for key, value in culprits:
+            self.problem(self.value_place(key, value), f"{key}={json.dumps(value)} changes the plant: {fixed}")
+        if not culprits:
+            self.problem(("from",), f"{case.label} is another plant: {fixed}")
+
+    def changes(self, scenario: Path, key: str, value) -> bool:
+        """Whether `key: value` alone gives `scenario` another fingerprint than the checkpoint's."""
+        try:
+            alone = load_scenario(scenario, {key: value})
+        except ScenarioError:   # reported with the case that has it
+            return False
+        return checkpoint.fingerprint(alone) != self.checkpoint.fingerprint
 
     def cause(self, problem: Problem, case: Case, n: int, entry: str, own_count: int) -> tuple[tuple, str]:
         where = f"in {entry}: "
