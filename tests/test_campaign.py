@@ -40,7 +40,7 @@ SPEEDS = """\
       - {name: far, slot: bottle.body.position, is: {">": [0.6, -1, -1]}}
     time_limit: 60
     """
-LONG_SECONDS = 600   # s simulated of a bottle standing on a stopped belt: ~3 s of wall time here
+LONG_SECONDS = 300   # s simulated of a bottle standing on a stopped belt: ~1.5 s of wall time here
 
 
 def write(folder: Path, text: str, name: str = "campaign.yaml") -> Path:
@@ -271,7 +271,7 @@ def test_a_case_that_crashes_is_that_cases_failure_with_its_reason(tmp_path):
     assert crashed["verdict"] == "crashed" and crashed["attempts"] == 1
     assert crashed["reason"].startswith("the run was killed by SIGKILL")
     assert other["verdict"] == "passed"   # the worker went on with the next case
-    assert campaign.testcases()[0] == ("the run [belt_bottle_sensor[objects.belt.speed=0, run.duration=600, "
+    assert campaign.testcases()[0] == ("the run [belt_bottle_sensor[objects.belt.speed=0, run.duration=300, "
                                        "run.seed=0]]", "error")
 
 
