@@ -47,6 +47,13 @@ class Engine:
         self.filters: dict[tuple[int, int], tuple[int, int]] = {}
         self.asleep: dict[int, bool] = {}
         self.motors: dict[tuple[int, int], tuple[float, float]] = {}
+        # Bullet numbers every collision object's broadphase entry as it makes it (a counter
+        # that only goes up), and a filter change makes the entry again: `refreshes` counts
+        # those remakings and `refreshed` says when each (body, link) was last remade. The
+        # numbers order the contact pairs and the solver's rows, and restoreState finds bodies
+        # and contact points by them (restore_state makes them again in the same order).
+        self.refreshes = 0
+        self.refreshed: dict[tuple[int, int], int] = {}
 
     @property
     def solver_iterations(self) -> int:
@@ -129,6 +136,8 @@ class Engine:
         """A body's (or link's) collision filter group and mask: (0, 0) takes it out of every pair."""
         self.call(pybullet.setCollisionFilterGroupMask, body, link, group, mask)
         self.filters[body, link] = (group, mask)
+        self.refreshed[body, link] = self.refreshes
+        self.refreshes += 1
 
     def set_motor(self, body: int, joint: int, velocity: float, force: float) -> None:
         """A joint's velocity motor: its target velocity and the most force it may use."""
@@ -170,24 +179,23 @@ class Engine:
         return self.call(pybullet.getAABB, body, link)
 
     # --- state (hub/core/state.py) ----------------------------------------------------------
-    STATE = ("filters", "asleep", "motors")
+    STATE = ("filters", "asleep", "motors", "refreshes", "refreshed")
 
     def save_state(self) -> dict:
         """The engine's whole dynamic state: its own (bodies' poses and velocities, joint states,
-        contact points with their cached impulses, as pybullet's saveBullet writes them) and the
-        settings the hub made that it does not hold."""
+        contact points with their cached impulses, as pybullet's saveBullet writes them) and what
+        the hub set that it does not hold (filters, sleep, motors, the broadphase's numbering)."""
         return {"bullet": self._bullet(), "filters": dict(self.filters), "asleep": dict(self.asleep),
-                "motors": dict(self.motors)}
+                "motors": dict(self.motors), "refreshes": self.refreshes, "refreshed": dict(self.refreshed)}
 
     def restore_state(self, saved: dict) -> None:
-        """Put back an engine state saved from a world of the same build: the hub's settings
-        first (a filter change drops a body's contact points), then the engine's own with pybullet's
-        restoreState, which a freshly built world continues from exactly as the saved one
-        would have (tests/test_checkpoint.py)."""
-        for key in sorted(set(self.filters) | set(saved["filters"])):
-            want = saved["filters"].get(key, DYNAMIC)   # set only after the save: it was a dynamic body's own
-            if self.filters.get(key, DYNAMIC) != want:
-                self.set_filter(*key, *want)
+        """Put back an engine state saved from a world of the same build, into a world freshly
+        built (one that has not run past the save): the filters first, remade in the saved order
+        so that every collision object gets the broadphase number it had (pybullet's restoreState
+        finds bodies and contact points by that number, and the solver orders its rows by it);
+        then sleep and motors, then the engine's own state. A freshly built world then continues
+        exactly as the saved one did (tests/test_checkpoint.py)."""
+        self._renumber(saved["refreshes"], saved["refreshed"], saved["filters"])
         for body in sorted(set(self.asleep) | set(saved["asleep"])):
             want = saved["asleep"].get(body, False)
             if self.asleep.get(body) != want:
@@ -195,7 +203,7 @@ class Engine:
         for key, (velocity, force) in sorted(saved["motors"].items()):
             if self.motors.get(key) != (velocity, force):
                 self.set_motor(*key, velocity, force)
-        self.filters, self.asleep, self.motors = (dict(saved[k]) for k in ("filters", "asleep", "motors"))
+        self.asleep, self.motors = dict(saved["asleep"]), dict(saved["motors"])
         fd, path = tempfile.mkstemp(suffix=".bullet", dir=_SCRATCH)
         try:
             with os.fdopen(fd, "wb") as out:
@@ -205,6 +213,22 @@ class Engine:
             raise CheckpointError(f"the engine's saved state does not fit this world: {exc}") from None
         finally:
             os.unlink(path)
+
+    def _renumber(self, refreshes: int, refreshed: dict, filters: dict) -> None:
+        """Remake collision objects' broadphase entries until each has the number it had when
+        saved: those last remade after this world's own remakings, in their saved order, each
+        remade as often as the counter needs to reach its number (a remaking only counts up, and
+        every remaking between two last ones was of an object remade again later)."""
+        if refreshes < self.refreshes or any(refreshed.get(key, -1) < at for key, at in self.refreshed.items()):
+            raise CheckpointError("the engine's saved state is of an earlier point than this world's: "
+                                  "a checkpoint is put back into a freshly built world")
+        for at, key in sorted((at, key) for key, at in refreshed.items() if at >= self.refreshes
+                              and self.refreshed.get(key) != at):
+            while self.refreshes <= at:
+                self.set_filter(*key, *filters[key])
+        if self.refreshes != refreshes:
+            raise CheckpointError(f"the engine's saved numbering is inconsistent: {refreshes} remakings saved, "
+                                  f"{self.refreshes} made again")
 
     def _bullet(self) -> bytes:
         """pybullet's saveBullet, which writes only to a file: a scratch file in memory where there is one."""
