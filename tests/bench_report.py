@@ -361,6 +361,7 @@ def cost_sections(report: Report) -> None:
     from . import bench, bench_view
     from .bench_bottling import bottling_plant
     from .bench_campaign import campaign
+    from .bench_checkpoint import checkpoints
     from .bench_gateway import gateway
     from .bench_bus import bus_lockstep, data_plane, watched_plant
     from .bench_plant import plant_elements
@@ -372,7 +373,7 @@ def cost_sections(report: Report) -> None:
                           ("event_latency", bench.event_latency, ()), ("plant_elements", plant_elements, ()),
                           ("flush", bench.flush_cost, ()), ("lockstep", bus_lockstep, ()), ("data_plane", data_plane, ()),
                           ("watched_plant", watched_plant, ()), ("bottling_plant", bottling_plant, ()),
-                          ("gateway", gateway, ()), ("campaign", campaign, ()),
+                          ("gateway", gateway, ()), ("campaign", campaign, ()), ("checkpoints", checkpoints, ()),
                           ("petri", bench_petri.markdown, ()), ("view", bench_view.main, ([],))):
         captured(report, key, fn, *args)
 

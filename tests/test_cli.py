@@ -158,7 +158,9 @@ FAILING = """
 def test_a_run_that_fails_exits_1_and_its_summary_says_how(write_scenario, tmp_path):
     path = write_scenario(FAILING)
     proc = planthub("run", path, "--out", tmp_path / "out")
-    assert proc.returncode == 1 and proc.stdout == ""
+    assert proc.returncode == 1
+    assert "  failed       failed at t = 0 s: participant 'drive': its process exited with code 3 before it could " \
+           "join" in proc.stdout.splitlines()
     assert proc.stderr.splitlines()[-2:] == [
         "planthub: waiting for participant 'drive' to join (launched, up to 10 s)",
         "planthub: participant 'drive': its process exited with code 3 before it could join"]
