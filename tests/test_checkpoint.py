@@ -1,9 +1,11 @@
 """Checkpoints: a run saved at T and resumed gives, from T on, the rows and events of the run that went on (hub/run/checkpoint.py)."""
 from __future__ import annotations
 
+import csv
 import pickle
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import pytest
@@ -245,3 +247,44 @@ def test_planthub_run_names_a_bad_checkpoint_file(tmp_path):
     done = _planthub("run", SCENARIOS / "switch.yaml", "--out", tmp_path / "out", "--resume", bad, cwd=ROOT)
     assert done.returncode != 0
     assert f"{bad}: its header cannot be read (KeyError" in done.stderr
+
+
+# --- live: an operator's checkpoint -------------------------------------------------------------
+def test_an_operator_takes_a_checkpoint_of_a_running_plant(tmp_path):
+    """`planthub send RUN checkpoint`: saved at the point the answer names, recorded, and resumable;
+    a run without a folder refuses it with the reason."""
+    from hub.bus.session import Bus
+    from hub.bus.settings import BusSettings
+    from hub.live import Viewer
+    from hub.run.pacing import Pacer
+
+    name = SCENARIOS / "switch.yaml"
+    with Bus(BusSettings()) as bus:
+        with Run(load_scenario(name), out=tmp_path / "live", bus=bus, pacer=Pacer(150, factor=1.0)) as run, \
+                Viewer("switch", bus.endpoints) as operator:
+            run.start()
+            asked = operator.command("checkpoint", by="trainer", wait=None)
+            thread = threading.Thread(target=run.run, daemon=True)
+            thread.start()
+            answer = operator.answer(asked, 10)
+            assert answer["ok"], answer
+            assert operator.command("stop")["ok"]
+            thread.join(30)
+            assert not thread.is_alive()
+        saved = tmp_path / "live" / "checkpoints" / f"{answer['tick']}.ckpt"
+        assert checkpoint.header(checkpoint.read(saved), str(saved))[0].tick == answer["tick"]
+        with open(tmp_path / "live" / "commands.csv", newline="") as f:
+            recorded = [(r["op"], int(r["tick"]), r["by"]) for r in csv.DictReader(f)]
+        assert recorded[0] == ("checkpoint", answer["tick"], "trainer")
+        with Run(load_scenario(name), out=tmp_path / "resumed", resume=(checkpoint.read(saved), str(saved))) as resumed:
+            resumed.run()
+            assert resumed.resumed.tick == answer["tick"]
+        with Run(load_scenario(name), bus=bus) as run, Viewer("switch", bus.endpoints) as operator:
+            run.start()
+            asked = operator.command("checkpoint", wait=None)
+            thread = threading.Thread(target=run.run, daemon=True)
+            thread.start()
+            refused = operator.answer(asked, 10)
+            thread.join(30)
+        assert not refused["ok"]
+        assert refused["error"] == "checkpoint: this run has no folder to write checkpoints into (planthub run --out)"

@@ -10,6 +10,9 @@ point, recorded with its tick in `commands.csv`, and replayed from there bit for
   the run's control (hub/run/hold.py). They change when points are computed, never what: a
   replay ignores them and gives the same recording. While paused, they are taken at once; other
   commands wait for the next point.
+- `checkpoint`: the run is saved at the next point into its folder's `checkpoints/TICK.ckpt`
+  (hub/run/checkpoint.py). Like the run's control it changes nothing the run computes: recorded
+  and noted, and a replay goes past it.
 
 A target read by its own component within the step (a constant's or connector's input) cannot
 be commanded: command the slot that feeds it.
@@ -29,7 +32,7 @@ from hub.core.registry import did_you_mean
 from hub.core.slots import Direction, SlotType
 from hub.bus import wire
 
-OPS = ("set", "force", "release", "stop", "pause", "resume", "step", "pace")
+OPS = ("set", "force", "release", "stop", "pause", "resume", "step", "pace", "checkpoint")
 CONTROL = ("pause", "resume", "step", "pace")   # the run's control: hub/run/hold.py
 MAX_STEPS = 100_000   # points one `step` may ask for
 MAX_PACE = 1000.0     # the fastest pace one may ask for, × real time
@@ -89,6 +92,7 @@ class Commands:
         self._waiting: list = []   # commands taken in while paused, applied at the next point
         self.stop_pending = False    # a stop came while the run was held: it ends the run at the next point
         self.control = None        # the run's control (hub/run/hold.py Hold): pause, resume, step, pace
+        self.on_checkpoint = None  # asks for a checkpoint at this point (hub/run/checkpoint.py Checkpointer.request)
         self.stop_requested = False
 
     def stop(self, tick: int) -> Stop | None:
@@ -110,7 +114,7 @@ class Commands:
         op, by = message["op"], message.get("by", "")
         if not isinstance(by, str) or len(by) > MAX_NAME:
             raise CommandError(f"`by` must be a string of at most {MAX_NAME} characters, got {_shown(by)}")
-        if op in ("stop", "pause", "resume"):
+        if op in ("stop", "pause", "resume", "checkpoint"):
             return Command(op, by=by)
         if op == "step":
             count = message.get("value", 1)
@@ -175,6 +179,11 @@ class Commands:
             kind = self.slots[command.slot][1].type if command.slot else None
             if command.op == "stop":
                 self.stop_requested = True
+            elif command.op == "checkpoint":
+                if self._replay is None:
+                    self.on_checkpoint()
+                self._note_control(tick, command, "a checkpoint at this point")
+                continue
             elif command.op in CONTROL:
                 # When points are computed is no part of the results: recorded for a replay, which
                 # runs through, and noted in bus_log.csv — events.csv holds only what the plant did.
@@ -208,6 +217,9 @@ class Commands:
                                "this run has no control of its points (a replay, or no live commands)")
                     if refused:
                         raise CommandError(refused)
+                if command.op == "checkpoint" and self.on_checkpoint is None:
+                    raise CommandError("checkpoint: this run has no folder to write checkpoints into "
+                                       "(planthub run --out)")
             except (CommandError, wire.WireError) as exc:
                 self._answer(payload, tick, str(exc))
                 continue
@@ -231,9 +243,9 @@ class Commands:
                 self._waiting.append(command)
                 self.stop_pending |= command.op == "stop"
 
-    def _note_control(self, tick: int, command: Command) -> None:
+    def _note_control(self, tick: int, command: Command, what: str = "the run's control") -> None:
         self.recorder.command(tick, command.op, "", command.value_text(None), command.by)
-        self.recorder.notice(tick, f"{command.describe(None)} (the run's control)")
+        self.recorder.notice(tick, f"{command.describe(None)} ({what})")
 
     def _answer(self, payload: bytes, tick: int, error: str | None) -> None:
         if self._results is None:

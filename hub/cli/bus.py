@@ -47,10 +47,12 @@ def add_commands(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str 
         epilog="example:\n  planthub send belt_ramp_participant force belt.drive.speed 0.2 --connect tcp/127.0.0.1:7447 "
                "--by alice\n\n" + epilog)
     send.add_argument("run", help="the run's name (the scenario's name)")
-    send.add_argument("op", choices=["set", "force", "release", "stop", "pause", "resume", "step", "pace"],
+    send.add_argument("op", choices=["set", "force", "release", "stop", "pause", "resume", "step", "pace",
+                                     "checkpoint"],
                       help="set: the slot takes the value at the next point; force: at every point until release; "
                            "stop: the run ends after the next point; pause, resume; step N: N points while "
-                           "paused; pace F: F × real time (a --realtime run)")
+                           "paused; pace F: F × real time (a --realtime run); checkpoint: the run saved at the "
+                           "next point into its folder's checkpoints/TICK.ckpt")
     send.add_argument("slot", nargs="?", default="",
                       help="object.component.slot (for set, force, release); for step and pace: the number")
     send.add_argument("value", nargs="?", help="the value, read as YAML (0.2, true, [0, 0, 1]); for set and force")

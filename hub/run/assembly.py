@@ -95,9 +95,9 @@ class Run:
             watchers = [*self.contributed, self.watcher, *observers]
             ticks, every = checkpoints
             self.checkpointer = None
-            if ticks or every:
-                if self.out is None:
-                    raise SimulationError("checkpoints are written into the run's folder: give it one (--out)")
+            if (ticks or every) and self.out is None:
+                raise SimulationError("checkpoints are written into the run's folder: give it one (--out)")
+            if self.out is not None:   # at given ticks, and when an operator asks (`checkpoint`)
                 # Last of the observers: a checkpoint holds what every other one made of its point.
                 self.checkpointer = Checkpointer(self, self.out / "checkpoints", ticks, every, log=self.log)
                 watchers.append(self.checkpointer)
@@ -123,6 +123,7 @@ class Run:
                 live = self.link.start()
                 if live is not None:
                     self.commands = live
+                    live.on_checkpoint = self.checkpointer.request if self.checkpointer is not None else None
                     self.master.manipulators.append(live)
                     self.master.hold = Hold(live, pacer=self.master.pacer, state=self.link.lockstep.publish_state,
                                             idle=self.link.idle)

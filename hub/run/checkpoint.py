@@ -189,9 +189,15 @@ class Checkpointer:
         self.every = every
         self.log = log
         self.written: list[Path] = []
+        self.requested = False
+
+    def request(self) -> None:
+        """Save the run at the point being computed (an operator's `checkpoint` command)."""
+        self.requested = True
 
     def observe(self, tick: int, signals, events) -> None:
-        if tick in self.ticks or (self.every and tick and tick % self.every == 0):
+        if self.requested or tick in self.ticks or (self.every and tick and tick % self.every == 0):
+            self.requested = False
             path = self.folder / f"{tick}.ckpt"
             write(path, capture(self.run, in_point=True))
             self.written.append(path)
