@@ -8,7 +8,10 @@ answered from the areas, which the plant's values are written into at each publi
 a PLC input (I, `cycle`, an input string) 0x03 "accessing the object not allowed"; bytes no tag
 holds or beyond the area 0x05 "invalid address"; a part of a tag alone, a value out of its range, a
 raw value beyond its raw range or a string that is not UTF-8 0x07 "data type inconsistent". Each
-refusal is logged and nothing reaches the plant; bits of a written byte that no tag holds are ignored.
+refusal is logged and nothing reaches the plant; bits of a written byte that no tag holds, and the
+padding bytes that keep numbers at even bytes, are ignored (a write of nothing but them is refused).
+A write of several items in one request and a block download are refused whole, with the PDU error
+0x8104 "function not supported" (snap7 would apply the first item only, and a download unchecked).
 
 python-snap7 3.3.0's server has no hook for writes (its `set_rw_area_callback` is a stub), so
 `_Server` overrides its write handler, and keeps the bit of a bit-sized write that it would drop.
@@ -16,12 +19,15 @@ python-snap7 3.3.0's server has no hook for writes (its `set_rw_area_callback` i
 from __future__ import annotations
 
 import logging
+import socket
 import struct
 
 from snap7.datatypes import S7Area, S7WordLen
+from snap7.error import S7Error
 from snap7.server import Server
 from snap7.type import SrvArea
 
+from hub.core.errors import PlanthubError
 from hub.core.slots import SlotType
 from hub.gateway.image import ProcessImage
 from hub.gateway.tags import OUTPUT, S7_AREAS, S7_DB, S7_DB_NUMBER, S7_MARKERS, Tag
@@ -29,6 +35,7 @@ from hub.gateway.tags import OUTPUT, S7_AREAS, S7_DB, S7_DB_NUMBER, S7_MARKERS, 
 _AREAS = {S7_AREAS["input"]: (SrvArea.PE, S7Area.PE, 0), S7_AREAS["output"]: (SrvArea.PA, S7Area.PA, 0),
           S7_MARKERS: (SrvArea.MK, S7Area.MK, 0), S7_DB: (SrvArea.DB, S7Area.DB, S7_DB_NUMBER)}
 NOT_ALLOWED, INVALID_ADDRESS, INCONSISTENT = 0x03, 0x05, 0x07
+NOT_SUPPORTED = 0x8104   # the PDU's error class and code: "function not supported", as snap7's own refusals
 logging.getLogger("snap7").setLevel(logging.ERROR)   # it logs every connection and every read
 
 
@@ -42,6 +49,13 @@ class S7Server:
         self.tags = image.tags.tags
         self.server = None
         self.memory = {}       # S7Area, DB number → the area's bytes (the server's own bytearray)
+        # area → the bytes between its tags that keep the numbers at even bytes: like the bits of no
+        # tag, a PLC writing its whole image over them is not refused, and what it writes there ignored
+        self.padding = {}
+        for name in _AREAS:
+            mine = [t for t in self.tags if t.s7_area == name]
+            held = {b for t in mine for b in range(t.s7_byte, t.s7_byte + t.s7_size)}
+            self.padding[name] = set(range(max((t.s7_byte + t.s7_size for t in mine), default=0))) - held
 
     async def start(self) -> None:
         server = _Server(self, log=False)
@@ -52,8 +66,23 @@ class S7Server:
         for tag in self.tags:
             self._store(tag, self.image.read(tag.slot))
         server.host = self.host
-        server.start(tcp_port=self.port)
+        self._probe()
+        try:
+            server.start(tcp_port=self.port)
+        except S7Error as exc:
+            raise PlanthubError(f"the S7 server could not listen at {self.host}:{self.port}: {exc}") from None
         self.server = server
+
+    def _probe(self) -> None:
+        """Refuse a taken endpoint: snap7 binds with SO_REUSEPORT, so a second gateway (or a stale one)
+        on the same port would bind beside the first and share its PLC's connections silently."""
+        with socket.socket() as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)   # TIME_WAIT of a stopped gateway is no owner
+            try:
+                probe.bind((self.host, self.port))
+            except OSError as exc:
+                raise PlanthubError(f"the S7 server could not listen at {self.host}:{self.port}: "
+                                    f"{exc.strerror or exc} (another gateway or server holds the port?)") from None
 
     async def publish(self, changed: dict) -> None:
         for slot in sorted(changed, key=lambda s: s == "cycle"):   # the scan's number last: then all is there
@@ -89,7 +118,7 @@ class S7Server:
         tags = [t for t in self.tags if t.s7_area == name and t.s7_byte < end and start < t.s7_byte + t.s7_size
                 and (bit is None or t.s7_bit == bit)]
         covered = {b for t in tags for b in range(t.s7_byte, t.s7_byte + t.s7_size)}
-        if bit is not None and not tags or bit is None and any(b not in covered for b in range(start, end)):
+        if not tags or bit is None and any(b not in covered and b not in self.padding[name] for b in range(start, end)):
             return self._refuse(where, INVALID_ADDRESS, "no tag there")
         taken = []
         for tag in tags:
@@ -112,7 +141,7 @@ class S7Server:
 
     def _refuse(self, where: str, code: int, why: str) -> int:
         names = {NOT_ALLOWED: "0x03 object access not allowed", INVALID_ADDRESS: "0x05 invalid address",
-                 INCONSISTENT: "0x07 data type inconsistent"}
+                 INCONSISTENT: "0x07 data type inconsistent", NOT_SUPPORTED: "0x8104 function not supported"}
         self.image.refuse(where, f"{names[code]}: {why}")
         return code
 
@@ -131,6 +160,11 @@ class _Server(Server):
         return spec
 
     def _handle_write_area(self, request, client_address):
+        items = request["parameters"].get("item_count", 1)
+        if items != 1:   # snap7 parses the first item only: the others would be answered and dropped
+            self.gateway._refuse(f"{items} items in one request (S7)", NOT_SUPPORTED,
+                                 "a write of several items; write each item on its own")
+            return self._build_error_response(request, NOT_SUPPORTED)
         parsed = self._parse_write_address(request)
         if not parsed:
             return self._build_error_response(request, 0x8001)
@@ -145,6 +179,11 @@ class _Server(Server):
         # the answer python-snap7 gives, with the item's return code
         header = struct.pack(">BBHHHHBB", 0x32, 0x03, 0, request["sequence"], 2, 1, 0, 0)
         return header + struct.pack(">BB", 0x05, 1) + bytes([0xFF if code is None else code])
+
+    def _handle_request_download(self, request, client_address):
+        # a downloaded DB would replace data block 1 unchecked, past every tag's check
+        self.gateway._refuse("a block download (S7)", NOT_SUPPORTED, "blocks are not downloaded to a gateway")
+        return self._build_error_response(request, NOT_SUPPORTED)
 
 
 def _encode(tag: Tag, value) -> bytes:
