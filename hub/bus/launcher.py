@@ -73,10 +73,11 @@ class Launched:
             return ""
         return "\n".join(f"    {line}" for line in text)
 
-    def stop(self, grace: float = 3.0, keep: Path | None = None) -> list[str]:
+    def stop(self, grace: float = 3.0, keep: Path | None = None, as_name: str | None = None) -> list[str]:
         """Wait `grace` s for the process to end by itself (it was told the run stopped), then make it.
         With no grace (a lost participant: maybe frozen, where SIGTERM would wait) it is killed at once.
-        Its output is kept as `keep`/NAME.log when it said anything; the lines it said are returned."""
+        Its output is kept as `keep`/NAME.log (`as_name`.log if given) when it said anything; the lines
+        it said are returned."""
         try:
             if grace <= 0 and self.poll() is None:
                 self.process.kill()
@@ -87,15 +88,15 @@ class Launched:
                     self.process.kill()
                     self.process.wait(5.0)
         finally:
-            said = self._keep(keep)
+            said = self._keep(keep, as_name or self.name)
             self.log.unlink(missing_ok=True)
         return said
 
-    def _keep(self, folder: Path | None) -> list[str]:
+    def _keep(self, folder: Path | None, name: str) -> list[str]:
         try:
             text = self.log.read_text(errors="replace")
             if folder is not None and text.strip():
-                (folder / f"{self.name}.log").write_text(text)
+                (folder / f"{name}.log").write_text(text)
         except OSError:
             return []
         return text.rstrip().splitlines()

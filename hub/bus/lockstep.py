@@ -14,6 +14,7 @@ import logging
 import secrets
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from hub.bus.session import Bus, Inbox, local_endpoint
 from hub.core.errors import CheckpointError, SimulationError
@@ -58,6 +59,7 @@ class _Peer:
     welcomed: bool = False
     ready: bool = False                # initial outputs received after the last welcome
     lost: bool = False
+    losses: int = 0                    # times its launched process was lost and relaunched
     in_order: list | None = None       # wire position → scenario input index (None: the same order)
     out_order: list = field(default_factory=list)   # scenario output index → wire position
     readers: list = field(default_factory=list)     # per scenario output: wire value → slot value
@@ -84,7 +86,7 @@ class Lockstep:
     a resumption: the event log keeps it), `warn(text)` what happened beside it (a stranger refused)."""
 
     def __init__(self, bus: Bus, run: str, slaves: list, *, lease: float, on_loss: str,
-                 rate: int, log=lambda text: None, warn=lambda text: None):
+                 rate: int, log=lambda text: None, warn=lambda text: None, logs: Path | None = None):
         self.bus = bus
         self.run = run
         self.lease = lease
@@ -98,7 +100,7 @@ class Lockstep:
         self.inbox = Inbox()
         self.tick = 0
         self._closing = False
-        self.logs = None   # the folder where a launched process's output is kept when it ends (the run's)
+        self.logs = logs   # the folder where a launched process's output is kept when it ends (the run's)
         self.dropped: dict[tuple[str, str], int] = {}   # (participant, kind) → messages not taken
         self._tag = 0   # the last save or restore request's tag: an answer is taken only under its own
         self._token = None
@@ -531,8 +533,10 @@ class Lockstep:
         self.publish_state("paused", text)
         self.log(f"paused: {text}; waiting up to {spec.join_timeout:g} s for it to rejoin")
         peer.welcomed = peer.ready = False
-        if peer.process is not None:
-            peer.process.stop(grace=0.0)
+        if peer.process is not None:   # what it said says why it was lost: kept, per attempt, and shown
+            peer.losses += 1
+            kept = f"{spec.name}.lost{peer.losses}"
+            self._echo(peer, peer.process.stop(grace=0.0, keep=self.logs, as_name=kept), kept)
             peer.process = self._launch(peer)
         # It comes back with a new hello — or, if it only stalled and never lost its connection,
         # with its late answer.
@@ -574,11 +578,13 @@ class Lockstep:
                 self._token.undeclare()
 
 
-    def _echo(self, peer: _Peer, said: list[str], most: int = 12) -> None:
-        """What a launched process said (a gateway's refused writes), on the hub's console too: its last lines."""
+    def _echo(self, peer: _Peer, said: list[str], kept: str | None = None, most: int = 12) -> None:
+        """What a launched process said (a gateway's refused writes), on the hub's console too: its last
+        lines; `kept` is the name its output was kept under (NAME.log unless given)."""
         if not said:
             return
-        where = f" (all {len(said)} in {self.logs / (peer.slave.spec.name + '.log')})" if self.logs is not None else ""
+        where = f" (all {len(said)} in {self.logs / ((kept or peer.slave.spec.name) + '.log')})" \
+            if self.logs is not None else ""
         lines = "\n".join(f"    {line}" for line in said[-most:])
         _log.info(f"{peer.slave.spec.label} said{where}:\n{lines}")
 

@@ -87,8 +87,8 @@ class Run:
             slaves = [s for c in plant.components if getattr(s := getattr(c, "slave", None), "on_bus", False)]
             if bus is not None or slaves:
                 self.link = BusLink(plant, self.recorder, slaves, bus, commands, log=self.log,
-                                    looks=self.contributed, figures=lambda: self.figures)
-                self.link.logs = self.out   # what launched participants said is kept beside the run's files
+                                    looks=self.contributed, figures=lambda: self.figures,
+                                    logs=self.out)   # what launched participants said: beside the run's files
             # The scenario's expectations are watched in every run, so that a checkpoint carries
             # what they saw whichever command took it and whichever resumes it.
             self.watcher = Watcher([e for e in scenario.expect if isinstance(e, Expectation)], plant.index, rate)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import logging
+from pathlib import Path
 
 from hub.bus.commands import Commands
 from hub.bus.dataplane import DataPlane
@@ -20,12 +21,13 @@ class BusLink:
     recorded commands, the source of live operator commands.
 
     `bus` is an open Bus, or None: then one is opened from the scenario's `run.bus` (or the
-    defaults) and closed with the link. `start` launches and awaits the participants, before
+    defaults) and closed with the link. `logs` is the folder where what launched participants
+    said is kept (the run's), or None. `start` launches and awaits the participants, before
     the first point.
     """
 
     def __init__(self, plant, recorder, slaves: list, bus: Bus | None = None, commands: Commands | None = None,
-                 log=None, looks=(), figures=lambda: []):
+                 log=None, looks=(), figures=lambda: [], logs: Path | None = None):
         scenario = plant.scenario
         self.plant = plant
         self.recorder = recorder
@@ -36,6 +38,7 @@ class BusLink:
         self.commands = commands
         self.dataplane = self.lockstep = self.view = None
         self.looks, self.figures = looks, figures
+        self.logs = logs
         self._closed = False
 
     def start(self) -> Commands | None:
@@ -56,8 +59,7 @@ class BusLink:
             live = self.commands = Commands(plant, self.recorder)
             live.listen(self.bus, run)
         self.lockstep = Lockstep(self.bus, run, self.slaves, lease=settings.lease, on_loss=settings.on_loss,
-                                 rate=plant.world.rate, log=self._notice, warn=self.log)
-        self.lockstep.logs = getattr(self, "logs", None)   # the run's folder (hub/run/assembly.py sets it)
+                                 rate=plant.world.rate, log=self._notice, warn=self.log, logs=self.logs)
         self.lockstep.start(plant.world.tick)
         return live
 
