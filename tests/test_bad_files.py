@@ -66,6 +66,23 @@ def test_deep_nesting_is_refused(tmp_path, text):
     assert found.startswith(f"{path}:") and f"the document nests deeper than {MAX_DEPTH} levels" in found
 
 
+@pytest.mark.parametrize("value", ["&loop [*loop]", "&loop {inner: *loop}"])
+def test_a_recursive_alias_is_named_with_its_line(tmp_path, value):
+    """`x: &a [*a]` is a graph, not a tree: named where the alias points back, never a RecursionError."""
+    path = write(tmp_path, BASE.replace("    speed: 0.5\n", f"    speed: {value}\n"))
+    at = line(BASE, "speed: 0.5")
+    inner = "objects.belt.speed[0]" if value.startswith("&loop [") else "objects.belt.speed.inner"
+    assert f"{path}:{at}: {inner}: an alias refers to a value that holds it (defined at line {at}): a scenario is a " \
+           "tree, so an alias may only repeat a value defined before and outside it" in problems(path)
+
+
+def test_a_list_repeated_by_aliases_is_no_loop(tmp_path):
+    from hub.scenario.yamlsource import load_yaml
+
+    data, _, found = load_yaml(write(tmp_path, "a: &x [1, {b: 2}]\nc: [*x, *x]\n"))
+    assert found == [] and data == {"a": [1, {"b": 2}], "c": [[1, {"b": 2}], [1, {"b": 2}]]}
+
+
 def test_a_complex_key_is_named(tmp_path):
     path = write(tmp_path, BASE.replace("objects:\n", "objects:\n  ? [a, b]\n  : {module: bottle}\n"))
     assert f"{path}:{line(BASE, 'objects:') + 1}: objects: a key must be a name, not a list or a mapping (a YAML `? ` complex key)" in problems(path)

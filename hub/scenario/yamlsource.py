@@ -172,6 +172,7 @@ class _Reader:
         self.problems: list[Problem] = []
         self._scalars = _Constructor()
         self._count = 0
+        self._open: set[int] = set()   # the nodes being read (an alias back into one is a loop)
 
     def value(self, node, path: tuple, line: int | None = None):
         self._count += 1
@@ -179,6 +180,21 @@ class _Reader:
             raise _TooMany
         # A mapping entry is placed at its key's line, which is where a reader looks for it.
         self.lines[path] = line or node.start_mark.line + 1
+        if isinstance(node, (yaml.MappingNode, yaml.SequenceNode)):
+            if id(node) in self._open:
+                self.problems.append(Problem(
+                    self.file, self.lines[path], format_path(path),
+                    f"an alias refers to a value that holds it (defined at line {node.start_mark.line + 1}): "
+                    "a scenario is a tree, so an alias may only repeat a value defined before and outside it"))
+                return None
+            self._open.add(id(node))
+            try:
+                return self._collection(node, path)
+            finally:
+                self._open.discard(id(node))
+        return self.scalar(node, path)
+
+    def _collection(self, node, path: tuple):
         if isinstance(node, yaml.MappingNode):
             out = {}
             for key_node, value_node in node.value:
@@ -203,9 +219,7 @@ class _Reader:
                     continue
                 out[key] = self.value(value_node, path + (key,), key_node.start_mark.line + 1)
             return out
-        if isinstance(node, yaml.SequenceNode):
-            return [self.value(item, path + (i,)) for i, item in enumerate(node.value)]
-        return self.scalar(node, path)
+        return [self.value(item, path + (i,)) for i, item in enumerate(node.value)]
 
     def scalar(self, node, path: tuple):
         try:
