@@ -7,7 +7,8 @@ is taken, and refused with CIP's own general status: a PLC input 0x0F "privilege
 out of the tag's range, not finite or a string too long or not UTF-8 0x09 "invalid attribute
 value". cpppo itself refuses an unknown tag (0x05 "path destination unknown"), a value of a type
 that does not fit the tag, or more elements than the tag has (0xFF, extended status 0x2107 and
-0x2105); every refusal is logged, and nothing of it reaches the plant.
+0x2105); every refusal is logged, and nothing of it reaches the plant. An SSTRING's bytes are the
+string's UTF-8, both ways (cpppo itself takes them for ISO 8859-1 text).
 
 cpppo was chosen as the only maintained pure-Python EtherNet/IP *server* (pycomm3 and pylogix are
 clients); it keeps its tags in module globals, so one gateway per process (as `planthub gateway` is).
@@ -30,6 +31,8 @@ from hub.gateway.image import ProcessImage
 from hub.gateway.tags import OUTPUT, Tag
 
 PRIVILEGE_VIOLATION, INVALID_VALUE = 0x0F, 0x09
+STOP_LIMIT = 3.0   # s for cpppo's thread to end: less than the ServerThread's limit on the stop call
+_log = logging.getLogger(__name__)
 _CPPPO_LOGS = ("enip.srv", "enip.ucmm", "network", "cpppo")
 _REFUSING = ("enip.dev", "enip.lgx")
 DINT = 2 ** 31
@@ -45,8 +48,13 @@ class EnipServer:
         self.control = None
         self.thread = None
         self.refusals = _Refusals(image)
+        self.loggers = {}   # cpppo's loggers as they were before start: (level, propagate), restored by stop
 
     async def start(self) -> None:
+        self._probe()
+        for name in (*_CPPPO_LOGS, *_REFUSING):
+            logger = logging.getLogger(name)
+            self.loggers[name] = logger.level, logger.propagate
         for name in _CPPPO_LOGS:
             logging.getLogger(name).setLevel(logging.ERROR)   # it logs every connection at WARNING
         for name in _REFUSING:   # what they say of refused requests goes to the gateway's log, as a refusal
@@ -78,25 +86,57 @@ class EnipServer:
                     raise PlanthubError(f"EtherNet/IP server at {self.host}:{self.port} did not start: {exc}") from None
                 time.sleep(0.05)
 
+    def _probe(self) -> None:
+        """Refuse a taken endpoint: the wait for cpppo to listen would connect to whatever holds it."""
+        with socket.socket() as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)   # TIME_WAIT of a stopped gateway is no owner
+            try:
+                probe.bind((self.host, self.port))
+            except OSError as exc:
+                raise PlanthubError(f"EtherNet/IP server at {self.host}:{self.port} did not start: "
+                                    f"{exc.strerror or exc} (another gateway or server holds the port?)") from None
+
     async def publish(self, changed: dict) -> None:
         """Nothing to do: every read is answered from the image."""
 
     async def stop(self) -> None:
         if self.thread is not None:
             self.control["control"]["done"] = True
-            self.thread.join(5.0)
+            self.thread.join(STOP_LIMIT)
+            if self.thread.is_alive():   # a daemon thread: it ends with the gateway's process
+                _log.warning("gateway: the EtherNet/IP server at %s:%s did not stop within %g s",
+                             self.host, self.port, STOP_LIMIT)
             self.thread = None
         for name in _REFUSING:
             logging.getLogger(name).removeHandler(self.refusals)
+        for name, (level, propagate) in self.loggers.items():
+            logger = logging.getLogger(name)
+            logger.setLevel(level)
+            logger.propagate = propagate
+        self.loggers = {}
 
 
 class _TagAttribute(device.Attribute):
     """A Logix tag whose value is the process image's; cpppo checks a write's type and size first,
     then this checks its direction and value. A refusal is answered through cpppo's `error` (its
-    status for the request), cleared at the tag's next access."""
+    status for the request), cleared at the tag's next access. cpppo serves each connection in a
+    thread of its own and reads `error` in that thread right after the access: so `error` is the
+    thread's own, and another PLC's access to the same tag cannot clear a refusal before it is answered."""
 
     image: ProcessImage = None
     by_name: dict = {}
+
+    def __init__(self, *args, **kwargs):
+        self._errors = threading.local()
+        super().__init__(*args, **kwargs)
+
+    @property
+    def error(self) -> int:
+        return getattr(self._errors, "code", 0x00)
+
+    @error.setter
+    def error(self, code: int) -> None:
+        self._errors.code = code
 
     @property
     def tag(self) -> Tag:
@@ -106,8 +146,8 @@ class _TagAttribute(device.Attribute):
         self.error = 0x00
         tag = self.tag
         value = self.image.read(tag.slot)
-        if tag.type is SlotType.STRING:
-            value = value.encode()[:2 * tag.length].decode(errors="ignore")
+        if tag.type is SlotType.STRING:   # its UTF-8 bytes, as the ISO 8859-1 text cpppo encodes an SSTRING from
+            value = value.encode()[:2 * tag.length].decode(errors="ignore").encode().decode("iso-8859-1")
         elif tag.logix_type == "DINT":
             value = (int(value) + DINT) % (2 * DINT) - DINT if tag.type is SlotType.VOID else \
                 max(min(int(value), DINT - 1), -DINT)
@@ -124,10 +164,11 @@ class _TagAttribute(device.Attribute):
             self.error = PRIVILEGE_VIOLATION
             return
         try:
-            if tag.type is SlotType.STRING:
-                value = value if isinstance(value, str) else bytes(value).decode()
-                if len(value.encode()) > 2 * tag.length:
-                    raise ValueError(f"{len(value.encode())} bytes is longer than {2 * tag.length}")
+            if tag.type is SlotType.STRING:   # cpppo decodes an SSTRING's bytes as ISO 8859-1: the PLC's bytes again
+                raw = value.encode("iso-8859-1") if isinstance(value, str) else bytes(value)
+                if len(raw) > 2 * tag.length:
+                    raise ValueError(f"{len(raw)} bytes is longer than {2 * tag.length}")
+                value = raw.decode()
             else:
                 value = {"BOOL": bool, "REAL": float, "DINT": int}[tag.logix_type](value)
             value = tag.check_written(value)
