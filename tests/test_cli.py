@@ -82,6 +82,18 @@ def test_describe_unknown_module_suggests():
     assert proc.stderr == "planthub: unknown module 'convayor' (did you mean 'conveyor'?)\n"
 
 
+def test_describe_a_thing_a_module_is_suggests_the_modules_that_are_one():
+    """A newcomer's `belt` is no module's name; the modules whose descriptions start by calling
+    themselves one are suggested, and an unknown word gets the names there are."""
+    from hub.core.registry import default_registry
+
+    registry = default_registry()
+    assert registry.suggest("belt") == (" (did you mean 'conveyor' or 'curve' or 'pusher' or 'stopper'? their "
+                                        "descriptions say 'belt')")
+    assert registry.suggest("gate") == " (did you mean 'stopper'? their descriptions say 'gate')"
+    assert registry.suggest("xyzzy") == f" (known: {', '.join(registry.names())})"
+
+
 def test_console_script_is_installed():
     script = Path(sys.executable).parent / "planthub"   # installed beside the interpreter by make
     proc = subprocess.run([str(script), "describe", "bottle"], capture_output=True, text=True)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import difflib
 import importlib
+import re
 from importlib import metadata
 
 from hub.core.module import Module
@@ -36,10 +37,31 @@ class Registry:
 
     def get(self, name: str) -> type[Module]:
         if name not in self._entries:
-            raise UnknownModule(f"unknown module {name!r}{did_you_mean(name, self._entries)}")
+            raise UnknownModule(f"unknown module {name!r}{self.suggest(name)}")
         if name not in self._loaded:
             self._loaded[name] = load_entry(self._entries[name])
         return self._loaded[name]
+
+
+    def suggest(self, name: str) -> str:
+        """` (did you mean 'x'?)` for the closest name; else for the modules whose one-line
+        description names the thing in its first words (a `belt` is a conveyor, a curve, …); else
+        the names there are."""
+        close = did_you_mean(name, self._entries)
+        if close.startswith(" (did you mean") or not isinstance(name, str) or not name.isidentifier():
+            return close
+        word = re.compile(rf"\b{re.escape(name.replace('_', ' '))}s?\b", re.IGNORECASE)
+        described = []
+        for module in sorted(self._entries):
+            try:
+                lines = (self.get(module).__doc__ or "").strip().splitlines()
+            except Exception:   # a catalogue entry that does not import is no suggestion
+                continue
+            if lines and word.search(" ".join(lines[0].split()[:5])):
+                described.append(module)
+        if described:
+            return f" (did you mean {' or '.join(repr(m) for m in described[:4])}? their descriptions say {name!r})"
+        return f" (known: {', '.join(sorted(self._entries))})"
 
 
 def did_you_mean(name: str, choices) -> str:

@@ -282,7 +282,7 @@ class _Checker:
         out = {}
         for module, params in specs.items():
             if module not in self.registry:
-                self.problem(("defaults", module), f"unknown module {module!r}{did_you_mean(module, self.registry.names())}")
+                self.problem(("defaults", module), f"unknown module {module!r}{self.registry.suggest(module)}")
             elif isinstance(params, dict):
                 out[module] = params
         return out
