@@ -62,11 +62,51 @@ def long_case(folder: Path, time_limit: float, count: int = 1, duration: float =
         """)
 
 
-def start(args: list[str], cwd: Path) -> subprocess.Popen:
-    """A process in a session of its own (so a test can stop all it started), its output in files."""
-    log = open(cwd / f"{Path(args[2] if args[1] == '-m' else args[0]).name}-{time.monotonic_ns()}.log", "w")
-    return subprocess.Popen(args, cwd=cwd, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
-                            stdin=subprocess.DEVNULL)
+def start(args: list[str], cwd: Path, name: str, env: dict | None = None) -> subprocess.Popen:
+    """A process in a session of its own (so a test can stop all it started), its output in cwd/NAME.log."""
+    with open(cwd / f"{name}.log", "w") as log:   # the child has its own copy of the file
+        return subprocess.Popen(args, cwd=cwd, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
+                                stdin=subprocess.DEVNULL, env={**os.environ, **(env or {})})
+
+
+def until(done, what: str, limit: float = 30) -> None:
+    """Wait for `done()` up to `limit` s; the test fails saying `what` did not happen otherwise."""
+    deadline = time.monotonic() + limit
+    while not done():
+        if time.monotonic() > deadline:
+            pytest.fail(f"{what} did not happen within {limit:g} s")
+        time.sleep(0.1)
+
+
+DASK = str(Path(sys.executable).with_name("dask"))
+
+
+def scheduler(folder: Path) -> tuple[subprocess.Popen, str]:
+    """`dask scheduler` on 127.0.0.1 (a failed task not run again, as the embedded cluster does) and its address."""
+    file = folder / "scheduler.json"
+    process = start([DASK, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard", "--scheduler-file",
+                     str(file)], folder, "scheduler", env={"DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "0"})
+    try:
+        until(file.is_file, f"the scheduler writing {file} (its log: {folder / 'scheduler.log'})")
+        address = json.loads(file.read_text())["address"]
+    except BaseException:
+        stop(process)
+        raise
+    assert address.startswith("tcp://127.0.0.1:")
+    return process, address
+
+
+def worker(folder: Path, address: str) -> subprocess.Popen:
+    """`dask worker` of one thread on 127.0.0.1, once it has joined the scheduler at `address`."""
+    process = start([DASK, "worker", address, "--host", "127.0.0.1", "--nthreads", "1", "--no-dashboard"], folder,
+                    "worker")
+    log = folder / "worker.log"
+    try:
+        until(lambda: "Registered to" in log.read_text(), f"the worker joining {address} (its log: {log})")
+    except BaseException:
+        stop(process)
+        raise
+    return process
 
 
 def stop(process: subprocess.Popen) -> None:
@@ -130,6 +170,12 @@ def case_child(out: Path, limit: float = 60):
     pytest.fail(f"no case of {out} started within {limit} s")
 
 
+def running(out: Path) -> None:
+    """Once the first case's run is under way (its recording begun, its signals handled)."""
+    started = out / "cases" / "000-belt_bottle_sensor" / "recording.csv"
+    until(started.is_file, f"the first case writing {started}")
+
+
 def same_results(campaign: dict) -> list:
     """What must be equal for the same campaign on any number of workers (not where or how fast)."""
     return [(c["label"], c["verdict"], c["outcomes"], c["figures"], c["ended"]) for c in campaign["cases"]]
@@ -174,32 +220,15 @@ def test_a_local_cluster_with_two_workers_runs_every_case(local):
 def dask_cluster(tmp_path_factory):
     """A scheduler and a worker started with Dask's own command line on 127.0.0.1; its address."""
     folder = tmp_path_factory.mktemp("dask")
-    file = folder / "scheduler.json"
-    dask = str(Path(sys.executable).with_name("dask"))
-    env = {**os.environ, "DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "0"}
-    scheduler = subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                                  "--scheduler-file", str(file)], cwd=folder, env=env, start_new_session=True,
-                                 stdout=subprocess.DEVNULL, stderr=open(folder / "scheduler.log", "w"))
-    worker = None
+    process, address = scheduler(folder)
     try:
-        deadline = time.monotonic() + 30
-        while not file.is_file() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        assert file.is_file(), (folder / "scheduler.log").read_text()
-        address = json.loads(file.read_text())["address"]
-        assert address.startswith("tcp://127.0.0.1:")
-        worker = subprocess.Popen([dask, "worker", address, "--host", "127.0.0.1", "--nthreads", "1",
-                                   "--no-dashboard"], cwd=folder, start_new_session=True,
-                                  stdout=subprocess.DEVNULL, stderr=open(folder / "worker.log", "w"))
-        deadline = time.monotonic() + 30
-        while "Registered to" not in (folder / "worker.log").read_text() and time.monotonic() < deadline:
-            time.sleep(0.1)   # the worker has joined: a campaign sees it from its start
-        assert "Registered to" in (folder / "worker.log").read_text(), (folder / "worker.log").read_text()
-        yield address
+        joined = worker(folder, address)   # the worker has joined: a campaign sees it from its start
+        try:
+            yield address
+        finally:
+            stop(joined)
     finally:
-        for process in (worker, scheduler):
-            if process is not None:
-                stop(process)
+        stop(process)
 
 
 def test_a_scheduler_without_workers_ends_the_campaign_not_run(tmp_path):
@@ -207,24 +236,48 @@ def test_a_scheduler_without_workers_ends_the_campaign_not_run(tmp_path):
     from hub.campaign.plan import load_campaign
     from hub.campaign.runner import run_campaign
 
-    file = tmp_path / "scheduler.json"
-    scheduler = start([str(Path(sys.executable).with_name("dask")), "scheduler", "--host", "127.0.0.1", "--port", "0",
-                       "--no-dashboard", "--scheduler-file", str(file)], tmp_path)
+    process, address = scheduler(tmp_path)
     try:
-        deadline = time.monotonic() + 30
-        while not file.is_file() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        address = json.loads(file.read_text())["address"]
         lines = []
         with Cluster(address) as cluster:
             outcome = run_campaign(load_campaign(write(tmp_path, SPEEDS)), tmp_path / "out", cluster,
                                    progress=lines.append, no_workers=1)
     finally:
-        stop(scheduler)
+        stop(process)
     assert not outcome.passed and outcome.interrupted is None
     assert outcome.ended == "no worker in the cluster for 1 s after 0 of 4 cases"
     assert [r["reason"] for r in outcome.records] == ["not run: no worker in the cluster for 1 s"] * 4
-    assert lines == ["campaign: no worker in the cluster for 1 s: stopping the running cases (up to 15 s)"]
+    assert lines == ["campaign: no worker in the cluster for 1 s: stopping the running cases (up to 25 s)"]
+
+
+def test_a_scheduler_lost_mid_campaign_ends_it_with_its_files(tmp_path):
+    process, address = scheduler(tmp_path)
+    joined = None
+    try:
+        joined = worker(tmp_path, address)
+        campaign = Campaign(tmp_path, long_case(tmp_path, time_limit=60, duration=100000),
+                            "--scheduler", address, env={"DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "2s"})
+        try:
+            child = case_child(campaign.out)
+            running(campaign.out)   # (the campaign looks at its cluster every second: it has seen the case handed out)
+            os.killpg(process.pid, signal.SIGKILL)   # the scheduler dies, as a machine that goes away
+        finally:
+            code = campaign.wait()
+        child.wait(timeout=30)   # the case, cut off from its campaign, stopped itself
+    finally:
+        for started in (joined, process):
+            if started is not None:
+                stop(started)
+    assert code == 1, campaign.stderr
+    assert "Traceback" not in campaign.stderr
+    found = campaign.results()
+    assert found["passed"] is False and found["interrupted"] is None
+    assert found["broken"].startswith(f"scheduler {address} failed while "), found["broken"]
+    (case,) = found["cases"]
+    assert case["verdict"] == "stopped" and case["reason"] == f"stopped: {found['broken']}; its result did not come back"
+    assert [result for _, result in campaign.testcases()] == ["error", "failure"]
+    assert (campaign.out / "cases.csv").read_text().count("\n") == 2
+    assert f"campaign: {found['broken']}: stopping the running cases" in campaign.stderr
 
 
 def test_a_campaign_on_a_scheduler_and_worker_of_dasks_command_line(dask_cluster, local, tmp_path):
@@ -293,14 +346,12 @@ def test_ctrl_c_stops_the_campaign_and_keeps_what_finished(tmp_path):
     campaign = Campaign(tmp_path, long_case(tmp_path, time_limit=60, count=3, duration=100000), "--workers", "1")
     try:
         child = case_child(campaign.out)
-        started = campaign.out / "cases" / "000-belt_bottle_sensor" / "recording.csv"
-        deadline = time.monotonic() + 30
-        while not started.is_file() and time.monotonic() < deadline:   # the run is under way, its signals handled
-            time.sleep(0.1)
-        campaign.process.send_signal(signal.SIGINT)
+        running(campaign.out)
+        os.killpg(campaign.process.pid, signal.SIGINT)   # as a terminal's Ctrl-C: the campaign and its workers
     finally:
         code = campaign.wait()
     assert code == 130, campaign.stderr
+    assert "Traceback" not in campaign.stderr   # the workers ignored the terminal's SIGINT: the campaign decided
     assert not child.is_running()
     found = campaign.results()
     assert found["passed"] is False and found["interrupted"] == "SIGINT"

@@ -23,6 +23,10 @@ from xml.etree import ElementTree
 GRACE = 10.0     # s a stopped case has to write its files before it is killed
 POLL = 0.25      # s between looks at the child, the time limit and the campaign's stop
 TAIL = 20        # lines of the child's output kept in a failed case's reason
+OUTPUT = "output.txt"   # the child's output in its folder: there once the case began (removed before it is handed out)
+#: s the campaign waits for its stopped cases: _stop's SIGTERM and SIGKILL waits after a last look,
+#: and the results' way back from the workers
+STOPPING = 2 * GRACE + POLL + 4.75
 
 PASSED, FAILED, ERROR, TIMEOUT, CRASHED, STOPPED, LOST, NOT_RUN = (
     "passed", "failed", "error", "timeout", "crashed", "stopped", "lost", "not run")
@@ -53,7 +57,7 @@ def run_case(spec: dict, stopped=lambda: False) -> dict:
         (out / old).unlink(missing_ok=True)
     line = command(spec)
     started = time.monotonic()
-    with open(out / "output.txt", "wb") as output:
+    with open(out / OUTPUT, "wb") as output:
         child = subprocess.Popen([sys.executable, "-m", "hub.campaign.case", *line], stdout=output,
                                  stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, start_new_session=True)
         ended = None
@@ -106,7 +110,7 @@ def _judge(code: int, out: Path) -> tuple[str, str]:
 
 def _tail(out: Path) -> str:
     try:
-        lines = (out / "output.txt").read_text(errors="replace").strip().splitlines()
+        lines = (out / OUTPUT).read_text(errors="replace").strip().splitlines()
     except OSError:
         return ""
     return (":\n" + "\n".join(lines[-TAIL:])) if lines else ""

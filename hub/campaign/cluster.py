@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import logging
 import os
+import signal
 import uuid
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import dask
@@ -20,15 +22,16 @@ from distributed import Client, Event, LocalCluster, wait
 from distributed.client import FutureCancelledError, FuturesCancelledError
 from distributed.scheduler import KilledWorker
 
-from hub.campaign.case import run_case
+from hub.campaign.case import POLL, run_case
 from hub.core.errors import PlanthubError
 
 CONNECT = 30.0   # s for the embedded cluster to start; an existing scheduler: distributed.comm.timeouts.connect
 CLOSE = 30.0     # s to close the client and the embedded cluster
+ASK = 2.0        # s a case waits for the scheduler to say whether the campaign stops (else: it does not, yet)
 
 
 class ClusterError(PlanthubError):
-    """The cluster could not be started or reached."""
+    """The cluster could not be started or reached, or failed under a running campaign."""
 
 
 @dataclass
@@ -47,12 +50,43 @@ def _task(spec: dict, stop: str) -> dict:
     event = Event(stop)
 
     def stopped() -> bool:
+        # Event.is_set() waits for the scheduler without a limit: a scheduler that stops answering
+        # would hold the loop that enforces the case's time limit
         try:
-            return event.is_set()
-        except Exception:   # the scheduler is gone: nobody is waiting for this case any more
+            return event.client.sync(event.client.scheduler.event_is_set, name=event.name, callback_timeout=ASK)
+        except TimeoutError:   # no answer yet: asked again at the next look
+            return False
+        except Exception:   # noqa: BLE001 — the scheduler is gone: nobody is waiting for this case any more
             return True
 
     return run_case(spec, stopped)
+
+
+def dask_setup(worker) -> None:
+    """Dask's preload hook, run in each process of the embedded LocalCluster's workers as it starts:
+    a terminal's Ctrl-C reaches the whole process group, workers too, and the campaign — not a
+    worker dying of it — decides what a Ctrl-C stops."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@contextmanager
+def _asking(cluster: Cluster, what: str):
+    """The choke point of a running campaign's calls to Dask: whatever Dask raises — a scheduler
+    gone, a connection closed — is a ClusterError naming the cluster and what was asked."""
+    try:
+        yield
+    except ClusterError:
+        raise
+    except Exception as exc:   # noqa: BLE001 — Dask's errors have no common base; each is the cluster's failure
+        raise ClusterError(f"{cluster.where()} failed while {what}: {type(exc).__name__}: {exc}") from None
+
+
+@dataclass
+class Stopped:
+    """What stopping a campaign's cases left: the cases that came back, and what cut the wait short."""
+
+    ended: list[Finished]
+    trouble: str | None
 
 
 class Cluster:
@@ -69,24 +103,25 @@ class Cluster:
 
     def __enter__(self) -> Cluster:
         if self.quiet:   # a killed worker is a case's business, reported with it, not a page of warnings
-            for name in ("distributed", "tornado"):
+            named = [name for name in logging.root.manager.loggerDict if name.split(".")[0] in ("distributed", "tornado")]
+            for name in ("distributed", "tornado", *named):   # Dask's configuration gives some their own level
                 logging.getLogger(name).setLevel(logging.CRITICAL)
         try:
             if self.scheduler is None:
                 with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
                     self.local = LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True,
-                                              host="127.0.0.1", dashboard_address=None,
+                                              host="127.0.0.1", dashboard_address=None, preload=[__name__],
                                               silence_logs=logging.CRITICAL if self.quiet else logging.WARNING)
                 self.client = Client(self.local, timeout=CONNECT)
             else:
                 self.client = Client(self.scheduler)   # waits as long as Dask's configuration says
-        except (OSError, TimeoutError, ValueError) as exc:   # ValueError: an address Dask cannot read
+            self.stop = Event(self.name, client=self.client)
+        except Exception as exc:   # noqa: BLE001 — unreachable, an address Dask cannot read, a cluster that failed
             self.close()
-            raise ClusterError(f"cannot reach {self.where()}: {exc}") from None
-        except BaseException:   # a Ctrl-C while the cluster starts: what started of it is stopped
+            raise ClusterError(f"cannot reach {self.where()}: {_said(exc)}") from None
+        except BaseException:   # a Ctrl-C or SIGTERM while the cluster starts: what started of it is stopped
             self.close()
             raise
-        self.stop = Event(self.name, client=self.client)
         return self
 
     def __exit__(self, *exc) -> None:
@@ -96,36 +131,44 @@ class Cluster:
         return f"scheduler {self.scheduler}" if self.scheduler is not None else "a LocalCluster on 127.0.0.1"
 
     def describe(self) -> str:
-        threads = sum(self.client.nthreads().values())
-        return f"{self.where()}: {len(self.client.nthreads())} workers, {threads} cases at once"
+        with _asking(self, "asking for its workers"):
+            threads = self.client.nthreads()
+        return f"{self.where()}: {len(threads)} workers, {sum(threads.values())} cases at once"
 
     def slots(self) -> int:
         """How many cases run at once now (0: the cluster has no worker)."""
-        return sum(self.client.nthreads().values())
+        with _asking(self, "asking for its workers"):
+            return sum(self.client.nthreads().values())
 
     def submit(self, index: int, spec: dict, attempt: int = 1) -> None:
-        future = self.client.submit(_task, spec, self.name, key=f"{self.name}-case{index}-try{attempt}", pure=False)
+        with _asking(self, f"handing it case {index}"):
+            future = self.client.submit(_task, spec, self.name, key=f"{self.name}-case{index}-try{attempt}",
+                                        pure=False)
         self.pending[future] = (index, spec, attempt)
 
     def running(self) -> int:
         """Cases a worker is running now: each worker's cases handed to it, up to its threads (the
         scheduler hands a worker more than it runs at once)."""
         mine = {f.key for f in self.pending}
-        threads = self.client.nthreads()
-        return sum(min(threads.get(worker, 1), sum(key in mine for key in keys))
-                   for worker, keys in self.client.processing().items())
+        with _asking(self, "asking what its workers run"):
+            threads = self.client.nthreads()
+            processing = self.client.processing()
+        return sum(min(threads.get(worker, 1), sum(key in mine for key in keys)) for worker, keys in processing.items())
 
     def finished(self, timeout: float) -> list[Finished]:
         """The cases that ended within `timeout` s (none: nothing ended yet). A case whose worker
         died is sent once more, then reported lost."""
         if not self.pending:
             return []
-        try:
-            done, _ = wait(list(self.pending), timeout=timeout, return_when="FIRST_COMPLETED")
-        except TimeoutError:
-            return []
-        except FuturesCancelledError:   # cancelled on the scheduler (a restarted cluster): reported below
-            done = [f for f in self.pending if f.done()]
+        with _asking(self, "waiting for its cases"):
+            try:
+                done, _ = wait(list(self.pending), timeout=timeout, return_when="FIRST_COMPLETED")
+            except TimeoutError:
+                done = []
+            except FuturesCancelledError:   # cancelled on the scheduler (a restarted cluster): reported below
+                done = [f for f in self.pending if f.done()]
+            if self.client.status != "running":   # the client lost its scheduler and cancelled every case
+                raise ClusterError(f"{self.where()} failed while waiting for its cases: the scheduler is gone")
         out = []
         for future in done:
             index, spec, attempt = self.pending.pop(future)
@@ -142,23 +185,33 @@ class Cluster:
                 out.append(Finished(index, None, f"{type(exc).__name__}: {exc}", attempt))
         return sorted(out, key=lambda f: f.index)
 
-    def stop_cases(self, limit: float) -> list[Finished]:
+    def stop_cases(self, limit: float) -> Stopped:
         """Stop every case: those handed to a worker end (a running one writes its files), the others
-        are cancelled at once. What came back within `limit` s."""
-        self.stop.set()
-        handed = {key for keys in self.client.processing().values() for key in keys}
-        self.client.cancel([f for f in self.pending if f.key not in handed])
+        are cancelled at once. Never raises: a scheduler gone, or a second Ctrl-C, cuts the wait short."""
+        trouble = None
         try:
-            wait([f for f in self.pending if f.key in handed], timeout=limit)
-        except TimeoutError:
-            pass
+            with _asking(self, "stopping its cases"):
+                self.stop.set()
+                handed = {key for keys in self.client.processing().values() for key in keys}
+                self.client.cancel([f for f in self.pending if f.key not in handed])
+                try:
+                    wait([f for f in self.pending if f.key in handed], timeout=limit)
+                except TimeoutError:
+                    pass
+        except ClusterError as exc:
+            trouble = str(exc)
+        except KeyboardInterrupt:   # a second Ctrl-C or SIGTERM: no more waiting, what came back is kept
+            trouble = "stopping the cases was interrupted"
         ended = []
         for future in list(self.pending):
-            if future.done() and future.status == "finished":
+            if future.status == "finished":
                 index, spec, attempt = self.pending.pop(future)
                 ended.append(Finished(index, future.result(), None, attempt))
-        self.client.cancel(list(self.pending))
-        return ended
+        try:
+            self.client.cancel(list(self.pending))
+        except Exception:   # noqa: BLE001 — cancelling on a scheduler that may be gone: the client is closed next
+            pass
+        return Stopped(sorted(ended, key=lambda f: f.index), trouble)
 
     def close(self) -> None:
         if self.client is not None:
@@ -173,3 +226,7 @@ class Cluster:
             except Exception:   # noqa: BLE001
                 pass
             self.local = None
+
+
+def _said(exc: BaseException) -> str:
+    return str(exc) or type(exc).__name__

@@ -6,7 +6,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from hub.campaign.case import GRACE, LOST, NOT_RUN, PASSED, STOPPED, command
+from hub.campaign.case import LOST, NOT_RUN, OUTPUT, PASSED, STOPPED, STOPPING, command
+from hub.campaign.cluster import ClusterError
 from hub.campaign.plan import Campaign, Case
 
 TICK = 1.0   # s between looks at the cluster while nothing finishes
@@ -61,16 +62,18 @@ def record(case: Case, out: Path, result: dict | None, *, verdict: str | None = 
 
 def run_campaign(campaign: Campaign, out: Path, cluster, progress=None, no_workers: float = NO_WORKERS) -> Outcome:
     """Every case on `cluster` (hub/campaign/cluster.py, entered); `progress(line)` hears of each
-    finished case with the campaign's counts. A KeyboardInterrupt (Ctrl-C, Terminated), or a
-    cluster without a worker for `no_workers` s, stops the running cases, keeps what finished and
-    marks the rest not run."""
+    finished case with the campaign's counts. A KeyboardInterrupt (Ctrl-C, Terminated), a cluster
+    that fails (a ClusterError: its scheduler lost, …) or a cluster without a worker for
+    `no_workers` s stops the running cases, keeps what finished and marks the rest not run."""
     progress = progress or (lambda line: print(line, file=sys.stderr, flush=True))
     started = time.monotonic()
     cases = {case.index: case for case in campaign.cases}
     records: dict[int, dict] = {}
-    outcome = Outcome(campaign, out, cluster.describe(), [], "every case ran")
+    outcome = Outcome(campaign, out, cluster.where(), [], "every case ran")
     try:
+        outcome.cluster = cluster.describe()
         for case in campaign.cases:
+            (out / case.folder / OUTPUT).unlink(missing_ok=True)   # an earlier campaign's: this one's tells a case began
             cluster.submit(case.index, spec(case, out))
         alone = None   # since when the cluster has had no worker
         while len(records) < len(cases):
@@ -86,15 +89,29 @@ def run_campaign(campaign: Campaign, out: Path, cluster, progress=None, no_worke
                 outcome.broken = f"no worker in the cluster for {no_workers:g} s"
                 break
     except KeyboardInterrupt as exc:
-        outcome.interrupted = "SIGTERM" if isinstance(exc, Terminated) else "SIGINT"
+        outcome.interrupted = interruption(exc)
         outcome.broken = f"interrupted ({outcome.interrupted})"
+    except ClusterError as exc:
+        outcome.broken = str(exc)
     if outcome.broken is not None:
-        progress(f"campaign: {outcome.broken}: stopping the running cases (up to {GRACE + 5:g} s)")
-        for done in cluster.stop_cases(GRACE + 5):
+        progress(f"campaign: {outcome.broken}: stopping the running cases (up to {STOPPING:.0f} s)")
+        try:
+            stopped = cluster.stop_cases(STOPPING)
+        except KeyboardInterrupt as exc:   # a Ctrl-C or SIGTERM between stop_cases' own waits
+            outcome.interrupted = outcome.interrupted or interruption(exc)
+            stopped = None
+        if stopped is not None and stopped.trouble is not None:
+            progress(f"campaign: {stopped.trouble}")
+        for done in stopped.ended if stopped is not None else ():
             if done.result is not None:
                 records[done.index] = record(cases[done.index], out, done.result, attempts=done.attempt)
         for index, case in cases.items():
-            if index not in records:
+            if index in records:
+                continue
+            if (out / case.folder / OUTPUT).is_file():   # it began, was stopped, and its result did not come back
+                records[index] = record(case, out, None, verdict=STOPPED,
+                                        reason=f"stopped: {outcome.broken}; its result did not come back")
+            else:
                 records[index] = record(case, out, None, verdict=NOT_RUN, reason=f"not run: {outcome.broken}")
         ran = sum(r["verdict"] not in (NOT_RUN, STOPPED) for r in records.values())
         outcome.ended = f"{outcome.broken} after {ran} of {len(cases)} cases"
@@ -104,11 +121,17 @@ def run_campaign(campaign: Campaign, out: Path, cluster, progress=None, no_worke
     return outcome
 
 
-def not_run(campaign: Campaign, out: Path, where: str, why: str) -> Outcome:
-    """A campaign that could not start (its cluster unreachable): every case not run, saying why."""
+def interruption(exc: KeyboardInterrupt) -> str:
+    """The signal a KeyboardInterrupt stands for."""
+    return "SIGTERM" if isinstance(exc, Terminated) else "SIGINT"
+
+
+def not_run(campaign: Campaign, out: Path, where: str, why: str, interrupted: str | None = None) -> Outcome:
+    """A campaign that could not start (its cluster unreachable, a signal while it started): every
+    case not run, saying why."""
     records = [record(case, out, None, verdict=NOT_RUN, reason=f"not run: {why}") for case in campaign.cases]
-    return Outcome(campaign, out, where, records, f"not started: {why}", broken=f"not started: {why}",
-                   counts=_counts(records))
+    return Outcome(campaign, out, where, records, f"not started: {why}", interrupted=interrupted,
+                   broken=f"not started: {why}", counts=_counts(records))
 
 
 def _counts(records) -> dict:

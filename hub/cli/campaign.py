@@ -59,7 +59,7 @@ def _campaign(args) -> int:
     from hub.campaign.cluster import Cluster, ClusterError
     from hub.campaign.plan import load_campaign
     from hub.campaign.results import table, write_results
-    from hub.campaign.runner import Terminated, not_run, run_campaign
+    from hub.campaign.runner import Terminated, interruption, not_run, run_campaign
 
     scratch.sweep()
     campaign = load_campaign(args.file)   # a bad file: exit 3, every problem named
@@ -79,19 +79,30 @@ def _campaign(args) -> int:
         write_results(Outcome(campaign, out, "no cluster", [], "no case to run"), args.junit, started)
         print(f"planthub campaign {campaign.name}: no case to run")
         return OK
-    previous = signal.signal(signal.SIGTERM, terminate)
+    previous, sigint = signal.signal(signal.SIGTERM, terminate), signal.getsignal(signal.SIGINT)
     cluster = Cluster(args.scheduler, args.workers, quiet=verbosity(args) < 1)
+    outcome = None
     try:
-        with cluster:
-            _log.info(f"planthub campaign: {len(campaign.cases)} cases on {cluster.describe()}")
-            say = (lambda line: None) if verbosity(args) < 0 else None
-            outcome = run_campaign(campaign, out, cluster, progress=say)
-    except ClusterError as exc:   # nothing ran; the files say so, as for any campaign that went wrong
-        outcome = not_run(campaign, out, cluster.where(), str(exc))
-        _log.error(f"planthub campaign: {exc}")
+        try:
+            with cluster:
+                _log.info(f"planthub campaign: {len(campaign.cases)} cases on {cluster.describe()}")
+                say = (lambda line: None) if verbosity(args) < 0 else None
+                outcome = run_campaign(campaign, out, cluster, progress=say)
+        except ClusterError as exc:   # nothing ran; the files say so, as for any campaign that went wrong
+            outcome = not_run(campaign, out, cluster.where(), str(exc))
+            _log.error(f"planthub campaign: {exc}")
+        except KeyboardInterrupt as exc:   # a Ctrl-C or SIGTERM while the cluster started, or as it closed
+            if outcome is None:
+                signalled = interruption(exc)
+                outcome = not_run(campaign, out, cluster.where(), f"interrupted ({signalled})", interrupted=signalled)
+            else:
+                outcome.interrupted = outcome.interrupted or interruption(exc)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)   # the files are written whole: a signal now is not heard
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        write_results(outcome, args.junit, started)
     finally:
         signal.signal(signal.SIGTERM, previous)
-    write_results(outcome, args.junit, started)
+        signal.signal(signal.SIGINT, sigint)
     print("\n".join(table(outcome)))
     if outcome.interrupted is not None:
         return 143 if outcome.interrupted == "SIGTERM" else 130
