@@ -170,3 +170,11 @@ def test_set_with_nan_is_refused_on_the_command_line():
     assert proc.returncode == 3   # a bad scenario
     assert f"scenarios/belt_bottle_sensor.yaml:{line(BASE, 'speed: 0.5')}: objects.belt.speed: nan is not a finite number" in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize("value, message", [("nan", "'nan' is not of type 'number'"),
+                                            (float("nan"), "nan is not a finite number")])
+def test_a_bad_value_given_with_set_is_blamed_on_set(tmp_path, value, message):
+    """Not on the line of the file whose value it replaced."""
+    path = write(tmp_path, BASE)
+    assert problems(path, {"run.duration": value}) == [f"--set: run.duration: {message}"]

@@ -4,7 +4,7 @@ from __future__ import annotations
 import json
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import jsonschema
@@ -49,7 +49,9 @@ def load_scenario(path, overrides: dict | None = None, registry: Registry | None
     problems += _apply_overrides(data, overrides or {}, str(path))
     problems += _unfit_numbers(data, (), lines, str(path))
     checker = _Checker(path, data, lines, registry or default_registry())
-    checker.problems[:0] = problems
+    # A value given with --set is blamed on --set, not on the line of the file it replaced.
+    checker.overridden = {key for key in (overrides or {})}
+    checker.problems[:0] = [checker.blamed(p) for p in problems]
     # A value already reported (not finite, an unknown tag) is not judged again by the schema.
     checker.settled = {p.path for p in problems if p.path}
     return checker.check()
@@ -153,12 +155,20 @@ class _Checker:
         self.broken: set[str] = set()
         self.settled: set[str] = set()     # paths already reported while reading: not judged again
         self.rejected: list[tuple] = []    # paths the schema rejected: the meaning checks skip them
+        self.overridden: set[str] = set()  # dotted keys given with --set
 
     def problem(self, path: tuple, message: str) -> None:
         where = format_path(path)
         if any(where == s or where.startswith((s + ".", s + "[")) for s in self.settled):
             return
-        self.problems.append(Problem(self.file, line_of(self.lines, path), where, message))
+        self.problems.append(self.blamed(Problem(self.file, line_of(self.lines, path), where, message)))
+
+    def blamed(self, problem: Problem) -> Problem:
+        """A problem at or under a value given with --set, placed there rather than in the file."""
+        where = problem.path
+        if any(where == key or where.startswith((key + ".", key + "[")) for key in self.overridden):
+            return replace(problem, file="--set", line=None)
+        return problem
 
     def intact(self, path: tuple) -> bool:
         """Whether the schema found nothing wrong at or below `path`."""
