@@ -1,20 +1,25 @@
 """What a gateway tells when its PLC is missing or silent: a PLC that never sets plc_ready ends the
 gateway's wait inside the hub's join wait, and the run's error names plc_ready and the endpoint;
 what the launched gateway said is on the hub's console and in the run folder; the OPC UA browse
-names are in the plant's namespace, so a client's get_child finds them."""
+names are in the plant's namespace, so a client's get_child finds them; a malformed join deadline and
+a --ready-timeout longer than the hub's join wait are named."""
+import argparse
 import asyncio
+import os
 import subprocess
 import sys
+import time
 
 from asyncua import Client
 
+from hub.cli.gateway import _ready_timeout
 from hub.gateway.image import ProcessImage
 from hub.gateway.opcua import OpcUaServer
 from hub.gateway.server_thread import ServerThread
 from hub.gateway.tags import tag_map
 from hub.scenario.checker import load_scenario
 
-from .gateway_support import free_port
+from .gateway_support import BOTTLING, free_port
 from .helpers import ROOT
 from .test_gateway import belt_scenario
 
@@ -56,11 +61,36 @@ def test_the_launched_gateways_refusals_reach_the_hub_console_and_the_run_folder
         proc = subprocess.run([sys.executable, "-m", "hub", "run", str(path), "--realtime", "--out", str(tmp_path / "run")],
                               capture_output=True, text=True, cwd=ROOT, timeout=120)
     finally:
-        client.wait(timeout=60)
+        try:
+            client.wait(timeout=60)
+        finally:
+            if client.poll() is None:   # still trying after the run: not left behind
+                client.kill()
+                client.wait()
     assert proc.returncode == 0, proc.stderr[-3000:]
     refusal = "refused a write to occupied at I0.0 (S7): 0x03 object access not allowed: a PLC input is read-only"
     assert refusal in proc.stderr and "participant 'plc' said (all" in proc.stderr
     assert refusal in (tmp_path / "run" / "plc.log").read_text()
+
+
+def test_a_malformed_join_deadline_is_named_without_a_traceback():
+    proc = subprocess.run([sys.executable, "-m", "hub", "gateway", "s7", str(BOTTLING), "--object", "control",
+                           "--endpoint", f"127.0.0.1:{free_port()}"], capture_output=True, text=True, cwd=ROOT,
+                          timeout=60, env={**os.environ, "PLANTHUB_JOIN_DEADLINE": "soon"})
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr
+    assert ("the environment's PLANTHUB_JOIN_DEADLINE='soon' is not a time (seconds since the epoch, as the hub "
+            "that launches a gateway sets it)") in proc.stderr
+
+
+def test_a_ready_timeout_longer_than_the_hubs_join_wait_is_warned_of(monkeypatch, caplog):
+    args = argparse.Namespace(object="plc", sync="lockstep", ready_timeout=30.0)
+    monkeypatch.setenv("PLANTHUB_JOIN_DEADLINE", repr(time.time() + 60.0))
+    assert _ready_timeout(args) == 30.0 and "--ready-timeout" not in caplog.text   # within the wait: nothing to say
+    monkeypatch.setenv("PLANTHUB_JOIN_DEADLINE", repr(time.time() + 5.0))
+    assert _ready_timeout(args) == 30.0   # as asked, and warned of
+    warning = caplog.text
+    assert "gateway 'plc': --ready-timeout 30 s is longer than the " in warning
+    assert " s left of the hub's join wait: the hub gives up first; raise the object's join_timeout" in warning
 
 
 def test_opc_ua_browse_names_are_in_the_plants_namespace(tmp_path):

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import os
 import time
 from pathlib import Path
@@ -139,7 +140,15 @@ def _ready_timeout(args) -> float:
     """How long the gateway waits for plc_ready: inside the hub's join wait when the hub launched it
     (PLANTHUB_JOIN_DEADLINE), so that the gateway, not the hub, says what is missing."""
     deadline = os.environ.get("PLANTHUB_JOIN_DEADLINE")
-    left = float(deadline) - time.time() - JOIN_MARGIN if deadline else None
+    left = None
+    if deadline:
+        try:
+            left = float(deadline) - time.time() - JOIN_MARGIN
+        except ValueError:
+            left = math.nan
+        if not math.isfinite(left):
+            raise PlanthubError(f"the environment's PLANTHUB_JOIN_DEADLINE={deadline!r} is not a time (seconds since "
+                                f"the epoch, as the hub that launches a gateway sets it)")
     if args.ready_timeout is None:
         return max(left, 0.1) if left is not None else 30.0
     if left is not None and args.ready_timeout > left and args.sync == "lockstep":
