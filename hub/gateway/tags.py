@@ -16,14 +16,14 @@ S7 (`planthub gateway s7`): PLC inputs in the process inputs I, outputs in the p
 the handshake in the markers M, strings in data block 1; in each area the bits first (8 to a byte),
 then the numbers at even bytes: a counter or a scaled real a Word/Int (2 bytes), an int a DInt, a
 real a Real (4 bytes, big-endian as S7 keeps them), a string an S7 STRING[2·length]. EtherNet/IP
-(`planthub gateway enip`): each tag a Logix controller tag of its name, BOOL, DINT (counters wrap
-at 2³¹), REAL (engineering units; `scale` is only its range) or SSTRING.
+(`planthub gateway enip`): each tag a Logix controller tag of its name, BOOL, DINT (event counters
+wrap at 2³¹), REAL (engineering units; `scale` is only its range) or SSTRING.
 
 A real with `scale: [low, high]` is one register of raw counts: `raw` (default 0…27648, the usual
 analogue I/O range) maps linearly onto low…high, clamped for inputs, refused beyond for outputs.
 vec3 and quat slots are not mapped (a PLC has no such type): a gateway refuses them by name.
 The handshake of lockstep mode is three more tags of the folder `gateway`: `cycle` (PLC input:
-the scan number the plant waits on), `cycle_done` (PLC output: the PLC writes the scan number back
+the scan number the plant waits on; it counts modulo 65536 in every protocol, hub/gateway/participant.py), `cycle_done` (PLC output: the PLC writes the scan number back
 when its scan is done) and `plc_ready` (PLC output: the PLC sets it once, the gateway then joins).
 """
 from __future__ import annotations
