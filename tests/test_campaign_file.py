@@ -9,6 +9,7 @@ import textwrap
 import pytest
 
 from hub.campaign.plan import CampaignError, load_campaign
+from hub.run import checkpoint
 
 from .helpers import ROOT
 
@@ -191,3 +192,64 @@ def test_cases_that_do_not_fit_the_checkpoint_they_branch_from(tmp_path):
     text = problems(tmp_path, "planthub: 1\nscenarios: [SCENARIO]\nfrom: bad.ckpt\n")
     assert ("campaign.yaml:3: from: bad.ckpt: not a planthub checkpoint (it does not start with "
             "'planthub checkpoint')") in text
+    whole = (tmp_path / "warm" / "checkpoints" / "75.ckpt").read_bytes()
+    (tmp_path / "corrupt.ckpt").write_bytes(whole[:-1] + bytes([whole[-1] ^ 1]))   # one bit of its state flipped
+    text = problems(tmp_path, "planthub: 1\nscenarios: [SCENARIO]\nfrom: corrupt.ckpt\n")
+    assert "campaign.yaml:3: from: corrupt.ckpt: corrupt: its state does not match the checksum in its header" in text
+    (tmp_path / "cut.ckpt").write_bytes(whole[:-10])
+    size = checkpoint.header(whole, "")[0].size
+    text = problems(tmp_path, "planthub: 1\nscenarios: [SCENARIO]\nfrom: cut.ckpt\n")
+    assert (f"campaign.yaml:3: from: cut.ckpt: truncated or padded: its header promises {size} bytes of state, "
+            f"the file holds {size - 10}") in text
+
+
+def test_workers_and_scheduler_addresses_that_cannot_be(tmp_path, capsys):
+    from hub.cli.main import main
+
+    path = write(tmp_path, "planthub: 1\nscenarios: [SCENARIO]\nseeds: 2\n")
+    for value, message in (("0", "argument --workers: needs at least 1 worker, got 0"),
+                           ("x", "argument --workers: expected a number of workers, got 'x'")):
+        with pytest.raises(SystemExit) as exited:   # argparse's own exit for a bad option
+            main(["campaign", str(path), "--workers", value])
+        assert exited.value.code == 2
+        assert message in capsys.readouterr().err
+    out = tmp_path / "out"
+    assert main(["campaign", str(path), "--out", str(out), "--scheduler", "tcp://127.0.0.1:port"]) == 1
+    said = ("cannot reach scheduler tcp://127.0.0.1:port: not an address Dask can read (tcp://HOST:PORT): "
+            "invalid literal for int() with base 10: 'port'")
+    assert f"planthub campaign: {said}" in capsys.readouterr().err
+    found = json.loads((out / "campaign.json").read_text())
+    assert found["ended"] == f"not started: {said}"
+    assert [c["verdict"] for c in found["cases"]] == ["not run"] * 2
+    assert (out / "cases.csv").read_text().count("\n") == 3
+
+
+def test_only_failed_names_the_failed_cases_the_file_no_longer_has(tmp_path):
+    (tmp_path / "earlier").mkdir()
+    (tmp_path / "earlier" / "campaign.json").write_text(json.dumps({"cases": [
+        {"label": "belt_bottle_sensor[run.seed=0]", "verdict": "passed"},
+        {"label": "belt_bottle_sensor[run.seed=7]", "verdict": "failed"}]}))
+    done = campaign_command(tmp_path, "--out", "again", "--only-failed", "earlier")
+    assert done.returncode == 0, done.stderr
+    assert (f"planthub campaign: 1 failed case(s) of earlier/campaign.json are not in {tmp_path / 'campaign.yaml'} "
+            "any more: belt_bottle_sensor[run.seed=7]") in done.stderr
+    assert "no case to run" in done.stdout
+
+
+def test_plotting_a_campaign_that_cannot_be(tmp_path, capsys):
+    from hub.cli.main import main
+
+    folder = tmp_path / "campaign"
+    folder.mkdir()
+    results = folder / "campaign.json"
+    results.write_text('{"cases": [')
+    assert main(["plot", str(folder), "f", "--against", "mode"]) == 2
+    assert f"{results}: not a campaign's results (`planthub campaign --out`): Expecting value" in capsys.readouterr().err
+    results.write_text(json.dumps({"cases": [{"index": 0, "parameters": {"mode": "fast"}, "figures": {"f": 1}}]}))
+    assert main(["plot", str(folder), "f", "--against", "mode"]) == 2
+    assert "--against mode: case 0 has 'fast', not a number" in capsys.readouterr().err
+    results.write_text(json.dumps({"cases": [{"index": 0, "parameters": {"speed": 0.5}, "figures": {"f": 1}}]}))
+    (tmp_path / "file").write_text("")
+    out = tmp_path / "file" / "plot.png"   # under a file: no folder can be made there
+    assert main(["plot", str(folder), "f", "--against", "speed", "--out", str(out)]) == 1
+    assert f"cannot write {out}: " in capsys.readouterr().err

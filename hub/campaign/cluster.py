@@ -118,6 +118,9 @@ class Cluster:
             self.stop = Event(self.name, client=self.client)
         except Exception as exc:   # noqa: BLE001 — unreachable, an address Dask cannot read, a cluster that failed
             self.close()
+            if self.scheduler is not None and isinstance(exc, ValueError):
+                raise ClusterError(f"cannot reach {self.where()}: not an address Dask can read "
+                                   f"(tcp://HOST:PORT): {_said(exc)}") from None
             raise ClusterError(f"cannot reach {self.where()}: {_said(exc)}") from None
         except BaseException:   # a Ctrl-C or SIGTERM while the cluster starts: what started of it is stopped
             self.close()
