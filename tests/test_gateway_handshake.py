@@ -93,7 +93,7 @@ def test_what_a_lost_gateway_said_is_kept_and_shown_before_its_relaunch(tmp_path
         master.run()
     kept = tmp_path / "run" / "plc.lost1.log"
     assert REFUSAL in kept.read_text()
-    assert f"participant 'plc' said (all " in caplog.text and f" in {kept}):" in caplog.text
+    assert "participant 'plc' said (all " in caplog.text and f" in {kept}):" in caplog.text
     last = tmp_path / "run" / "plc.log"   # the relaunched one's own, if it said anything
     assert not last.exists() or REFUSAL not in last.read_text()
 
