@@ -110,11 +110,7 @@ def test_an_alias_bomb_is_refused_quickly(tmp_path):
                                         ("run.duration", float("inf")), ("run.communication_step", float("inf"))])
 def test_nan_and_infinity_are_refused_in_every_number(tmp_path, key, value):
     path = write(tmp_path, BASE)
-    # The line of the key the override replaces; a key the file lacks takes its section's line.
-    at = {"objects.belt.speed": "speed: 0.5", "objects.belt.k": "k: 16.0", "objects.bottle.mass": "mass: 0.05",
-          "objects.belt.length": "length: 2.0", "objects.bottle.radius": "radius: 0.03", "run.sleep_after": "run:",
-          "run.duration": "duration: 3.5", "run.communication_step": "run:"}[key]
-    assert problems(path, {key: value}) == [f"{path}:{line(BASE, at)}: {key}: {value!r} is not a finite number"]
+    assert problems(path, {key: value}) == [f"--set: {key}: {value!r} is not a finite number"]
 
 
 def test_nan_in_a_list_is_named_with_its_place(tmp_path):
@@ -126,9 +122,8 @@ def test_nan_in_a_parameter_is_not_judged_again_by_the_modules_own_checks():
     """The separator's check divides bottle_diameter by 2: a NaN there, reported and set aside, must
     not reach it (it did: a TypeError traceback)."""
     path = ROOT / "scenarios" / "separator.yaml"
-    text = path.read_text()
     assert problems(path, {"objects.sep.bottle_diameter": float("nan")}) == [
-        f"{path}:{line(text, 'sep: {module: separator')}: objects.sep.bottle_diameter: nan is not a finite number"]
+        "--set: objects.sep.bottle_diameter: nan is not a finite number"]
 
 
 @pytest.mark.parametrize("key, value, shown", [("run.duration", 1e300, "1e+300"),
@@ -139,10 +134,8 @@ def test_a_number_beyond_2_to_the_53_is_named(tmp_path, key, value, shown):
     checker counted its ticks (OverflowError). No scenario number needs more than a double holds
     exactly."""
     path = write(tmp_path, BASE)
-    at = {"run.duration": "duration: 3.5", "objects.belt.length": "length: 2.0", "run.seed": "seed: 0"}[key]
     assert problems(path, {key: value}) == [
-        f"{path}:{line(BASE, at)}: {key}: {shown} is out of range: a scenario's numbers stay within ±2**53 "
-        f"(about 9.0e15)"]
+        f"--set: {key}: {shown} is out of range: a scenario's numbers stay within ±2**53 (about 9.0e15)"]
 
 
 @pytest.mark.parametrize("entry, message", [
@@ -168,7 +161,7 @@ def test_set_with_nan_is_refused_on_the_command_line():
     proc = subprocess.run([sys.executable, "-m", "hub", "run", "scenarios/belt_bottle_sensor.yaml",
                            "--set", "objects.belt.speed=.nan"], capture_output=True, text=True, cwd=ROOT, timeout=60)
     assert proc.returncode == 3   # a bad scenario
-    assert f"scenarios/belt_bottle_sensor.yaml:{line(BASE, 'speed: 0.5')}: objects.belt.speed: nan is not a finite number" in proc.stderr
+    assert "--set: objects.belt.speed: nan is not a finite number" in proc.stderr
     assert "Traceback" not in proc.stderr
 
 

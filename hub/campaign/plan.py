@@ -170,7 +170,7 @@ class _Checker:
         """Load the case's scenario with its values; its problems reported at the campaign's line
         that caused them (a matrix value, an expectation) where one did. The scenario's name."""
         try:
-            scenario = load_scenario(case.scenario, case.overrides())
+            scenario = load_scenario(case.scenario, case.overrides(), blame=False)
         except ScenarioError as exc:
             for problem in exc.problems:
                 self.problem(*self.cause(problem, case, n, entry, own_count))

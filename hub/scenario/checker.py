@@ -40,8 +40,11 @@ def _list(value) -> list:
     return value if isinstance(value, list) else []
 
 
-def load_scenario(path, overrides: dict | None = None, registry: Registry | None = None) -> Scenario:
-    """Read, override (dotted keys, e.g. {"run.physics_rate": 1000}), check and return a scenario."""
+def load_scenario(path, overrides: dict | None = None, registry: Registry | None = None, *,
+                  blame: bool = True) -> Scenario:
+    """Read, override (dotted keys, e.g. {"run.physics_rate": 1000}), check and return a scenario.
+    `blame`: problems of an overridden value are placed at `--set`; a caller that places them
+    itself (a campaign, at its own lines) reads them at the file's lines they replaced."""
     path = Path(path)
     data, lines, problems = load_yaml(path)
     if data is None:
@@ -50,7 +53,7 @@ def load_scenario(path, overrides: dict | None = None, registry: Registry | None
     problems += _unfit_numbers(data, (), lines, str(path))
     checker = _Checker(path, data, lines, registry or default_registry())
     # A value given with --set is blamed on --set, not on the line of the file it replaced.
-    checker.overridden = {key for key in (overrides or {})}
+    checker.overridden = set(overrides or {}) if blame else set()
     checker.problems[:0] = [checker.blamed(p) for p in problems]
     # A value already reported (not finite, an unknown tag) is not judged again by the schema.
     checker.settled = {p.path for p in problems if p.path}
