@@ -6,10 +6,11 @@ import json
 import socket
 from datetime import datetime
 from pathlib import Path
-from xml.etree import ElementTree
 
 from hub.campaign.case import NOT_RUN, PASSED
 from hub.campaign.runner import Outcome
+from hub.core.files import written
+from hub.run.junit import TestCase, write_suite
 
 #: Fields that differ between equal campaigns (where and how fast a case ran); everything else is
 #: the same for the same campaign file, whatever the number of workers.
@@ -23,23 +24,17 @@ def write_results(outcome: Outcome, junit: Path | None, started: datetime) -> No
             "started": started.isoformat(timespec="seconds"), "cluster": outcome.cluster, "ended": outcome.ended,
             "passed": outcome.passed, "interrupted": outcome.interrupted, "broken": outcome.broken,
             "wall_seconds": outcome.wall_seconds, "counts": outcome.counts, "cases": outcome.records}
-    _atomic(out / "campaign.json", json.dumps(data, indent=1, ensure_ascii=False) + "\n")
+    with written(out / "campaign.json", encoding="utf-8") as file:
+        file.write(json.dumps(data, indent=1, ensure_ascii=False) + "\n")
     _write_table(out / "cases.csv", outcome.records)
     if junit is not None:
         write_junit(junit, outcome, started)
 
 
-def _atomic(path: Path, text: str) -> None:
-    scratch = path.with_suffix(path.suffix + ".part")
-    scratch.write_text(text, encoding="utf-8")
-    scratch.replace(path)
-
-
 def _write_table(path: Path, records: list[dict]) -> None:
     keys = list(dict.fromkeys(k for r in records for k in r["parameters"]))
     figures = list(dict.fromkeys(k for r in records for k in r["figures"]))
-    scratch = path.with_suffix(".csv.part")
-    with open(scratch, "w", newline="", encoding="utf-8") as file:
+    with written(path, newline="", encoding="utf-8") as file:
         writer = csv.writer(file)
         writer.writerow(["case", "scenario", *keys, "verdict", "failed", "wall_s", *figures, "reason", "folder"])
         for r in records:
@@ -49,7 +44,6 @@ def _write_table(path: Path, records: list[dict]) -> None:
                              r["verdict"], failed, r["wall_seconds"] if r["wall_seconds"] is not None else "",
                              *(r["figures"].get(k, "") for k in figures), r["reason"].splitlines()[0] if r["reason"] else "",
                              r["folder"]])
-    scratch.replace(path)
 
 
 def table(outcome: Outcome) -> list[str]:
@@ -86,28 +80,11 @@ def write_junit(path: Path, outcome: Outcome, started: datetime) -> None:
             cases.append((r["name"], f"the run [{r['label']}]", "passed", "", r))
     if outcome.broken is not None:
         cases.append(("campaign", "the campaign", "failure", outcome.ended, None))
-    count = lambda kind: sum(c[2] == kind for c in cases)
-    seconds = f"{outcome.wall_seconds:.3f}"
-    root = ElementTree.Element("testsuites", tests=str(len(cases)), failures=str(count("failure")),
-                               errors=str(count("error")), time=seconds)
-    suite = ElementTree.SubElement(root, "testsuite", name=suite_name, tests=str(len(cases)),
-                                   failures=str(count("failure")), errors=str(count("error")),
-                                   skipped=str(count("skipped")), time=seconds,
-                                   timestamp=started.isoformat(timespec="seconds"), hostname=socket.gethostname())
-    props = ElementTree.SubElement(suite, "properties")
-    for name, value in (("file", str(outcome.campaign.path)), ("cluster", outcome.cluster), ("ended", outcome.ended)):
-        ElementTree.SubElement(props, "property", name=name, value=value)
-    for classname, name, result, message, r in cases:
-        case = ElementTree.SubElement(suite, "testcase", classname=classname, name=name)
-        if r is not None and r["wall_seconds"] is not None:
-            case.set("time", f"{r['wall_seconds'] / max(1, sum(c[4] is r for c in cases)):.3f}")
-        if result != "passed":
-            mark = ElementTree.SubElement(case, result, message=message.splitlines()[0] if message else "")
-            mark.text = message
-        if r is not None and r["folder"]:
-            ElementTree.SubElement(case, "system-out").text = f"run folder: {outcome.out / r['folder']}"
-    ElementTree.indent(root)
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    scratch = Path(path).with_suffix(Path(path).suffix + ".part")
-    ElementTree.ElementTree(root).write(scratch, encoding="utf-8", xml_declaration=True)
-    scratch.replace(path)
+    suite = [TestCase(classname, name, result, message.splitlines()[0] if message else "",
+                      message if result != "passed" else None,
+                      r["wall_seconds"] / sum(c[4] is r for c in cases) if r and r["wall_seconds"] is not None else None,
+                      f"run folder: {outcome.out / r['folder']}" if r and r["folder"] else None)
+             for classname, name, result, message, r in cases]
+    write_suite(path, suite_name, suite, outcome.wall_seconds, timestamp=started, hostname=socket.gethostname(),
+                properties=[("file", str(outcome.campaign.path)), ("cluster", outcome.cluster),
+                            ("ended", outcome.ended)])

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from hub.cli.exits import OK, UsageError
 from hub.core.errors import PlanthubError
+from hub.core.numbers import is_number
 from hub.core.registry import did_you_mean
 
 _log = logging.getLogger("planthub.plot")
@@ -46,9 +47,9 @@ def plot_campaign(args) -> int:
             parameters = case.get("parameters", {})
             x = parameters.get(args.against)
             y = case.get("wall_seconds") if figure == WALL else case.get("figures", {}).get(figure)
-            if not _number(x):
+            if not is_number(x):
                 raise UsageError(f"--against {args.against}: case {case.get('index')} has {x!r}, not a number")
-            if not _number(y):   # a case that did not run, or crashed before its summary
+            if not is_number(y):   # a case that did not run, or crashed before its summary
                 continue
             label = ", ".join(f"{k}={json.dumps(parameters[k])}" for k in others if k in parameters)
             series.setdefault(label, []).append((x, y))
@@ -69,7 +70,3 @@ def plot_campaign(args) -> int:
               + (f" ({skipped} without the figures: not run or failed before their summary)" if skipped else ""))
     print(out)
     return OK
-
-
-def _number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)

@@ -18,12 +18,12 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
 from hub.core import state
 from hub.core.errors import CheckpointError
+from hub.core.files import written
 
 FORMAT = 1
 MAGIC = b"planthub checkpoint\n"
@@ -159,15 +159,9 @@ def apply(run, data: bytes, where: str) -> Header:
 
 
 def write(path: Path, data: bytes) -> None:
-    """Write a checkpoint atomically: to a temporary file beside `path`, synced, then renamed."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f".{path.name}.partial")
-    with open(partial, "wb") as out:
+    """Write a checkpoint atomically (hub/core/files.py)."""
+    with written(path, "wb") as out:
         out.write(data)
-        out.flush()
-        os.fsync(out.fileno())
-    os.replace(partial, path)
 
 
 def read(path: Path) -> bytes:

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 from hub.bus.commands import MAX_NAME
 from hub.core.errors import PlanthubError
+from hub.core.numbers import is_number
 
 #: the operator commands a browser may send; those that name a slot, and those that carry a value
 OPS = ("set", "force", "release", "stop", "pause", "resume", "step", "pace")
@@ -107,7 +108,7 @@ def _command(message: dict) -> CommandRequest:
         if not _integer(value) or not 1 <= value <= MAX_STEP:
             raise FrameError(f"step takes a number of points from 1 to {MAX_STEP}, got {_shown(value)}")
     elif op == "pace":
-        if not _number(value) or not value > 0:
+        if not is_number(value) or not value > 0:
             raise FrameError(f"pace takes a positive factor of real time (1.0, 2.0), got {_shown(value)}")
     elif op in ("release", "stop", "pause", "resume") and value is not None:
         raise FrameError(f"{op} takes no value, got {_shown(value)}")
@@ -116,7 +117,7 @@ def _command(message: dict) -> CommandRequest:
 
 def _rate(message: dict) -> RateRequest:
     period = message.get("period")
-    if period is not None and (not _number(period) or not 0 < period <= MAX_PERIOD):
+    if period is not None and (not is_number(period) or not 0 < period <= MAX_PERIOD):
         raise FrameError(f"rate takes a period in s, more than 0 and at most {MAX_PERIOD:g}, or null; "
                          f"got {_shown(period)}")
     return RateRequest(None if period is None else float(period))
@@ -131,20 +132,16 @@ def _playback(message: dict) -> PlaybackRequest:
             raise FrameError(f"{op} takes no value, got {_shown(value)}")
         return PlaybackRequest(op)
     if op == "speed":
-        if not _number(value) or not SPEEDS[0] <= value <= SPEEDS[1]:
+        if not is_number(value) or not SPEEDS[0] <= value <= SPEEDS[1]:
             raise FrameError(f"speed takes a factor of the recorded pace from {SPEEDS[0]:g} to {SPEEDS[1]:g}, "
                              f"got {_shown(value)}")
-    elif not _number(value):
+    elif not is_number(value):
         raise FrameError(f"seek takes a time in s of the recorded run, got {_shown(value)}")
     return PlaybackRequest(op, float(value))
 
 
 def _integer(value) -> bool:
     return isinstance(value, int) and not isinstance(value, bool)
-
-
-def _number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def _no_constant(name: str):
