@@ -1,4 +1,4 @@
-"""`planthub campaign` on real Dask clusters on loopback: the embedded LocalCluster with two workers, a scheduler and a worker started with Dask's own command line, a worker killed mid-case, a case that hangs, Ctrl-C.
+"""`planthub campaign` on real Dask clusters on loopback: the embedded LocalCluster with two workers, a scheduler and a worker started with Dask's own command line, a worker killed mid-case, a scheduler lost mid-case, a case that hangs, Ctrl-C and SIGTERM.
 
     campaign ──► LocalCluster (127.0.0.1) ──► worker ──► planthub test (a child per case)
              └─► dask scheduler ◄── dask worker      (--scheduler tcp://127.0.0.1:PORT)
@@ -390,6 +390,28 @@ def test_a_scheduler_that_cannot_be_reached_fails_the_campaign_with_its_files(tm
     assert f"planthub campaign: cannot reach scheduler tcp://127.0.0.1:{port}: Timed out" in campaign.stderr
     found = campaign.results()
     assert found["passed"] is False and found["ended"].startswith("not started: cannot reach scheduler")
+    assert [c["verdict"] for c in found["cases"]] == ["not run"] * 4
+    assert campaign.testcases()[-1] == ("the campaign", "failure")
+
+
+def test_sigterm_while_the_cluster_is_reached_ends_the_campaign_with_its_files(tmp_path):
+    with socket.socket() as silent:   # a "scheduler" that takes the connection and never answers
+        silent.bind(("127.0.0.1", 0))
+        silent.listen()
+        silent.settimeout(60)
+        campaign = Campaign(tmp_path, write(tmp_path, SPEEDS), "--scheduler", f"tcp://127.0.0.1:{silent.getsockname()[1]}")
+        connection = None
+        try:
+            connection, _ = silent.accept()   # the campaign is waiting for its cluster now (kept open: still waiting)
+            campaign.process.send_signal(signal.SIGTERM)
+        finally:
+            code = campaign.wait()
+            if connection is not None:
+                connection.close()
+    assert code == 143, campaign.stderr
+    assert "Traceback" not in campaign.stderr
+    found = campaign.results()
+    assert found["interrupted"] == "SIGTERM" and found["ended"] == "not started: interrupted (SIGTERM)"
     assert [c["verdict"] for c in found["cases"]] == ["not run"] * 4
     assert campaign.testcases()[-1] == ("the campaign", "failure")
 
