@@ -22,7 +22,7 @@ from distributed import Client, Event, LocalCluster, wait
 from distributed.client import FutureCancelledError, FuturesCancelledError
 from distributed.scheduler import KilledWorker
 
-from hub.campaign.case import POLL, run_case
+from hub.campaign.case import run_case
 from hub.core.errors import PlanthubError
 
 CONNECT = 30.0   # s for the embedded cluster to start; an existing scheduler: distributed.comm.timeouts.connect
@@ -83,10 +83,12 @@ def _asking(cluster: Cluster, what: str):
 
 @dataclass
 class Stopped:
-    """What stopping a campaign's cases left: the cases that came back, and what cut the wait short."""
+    """What stopping a campaign's cases left: the cases that came back, what cut the wait short, and
+    the signal's KeyboardInterrupt if that was a second Ctrl-C or SIGTERM."""
 
     ended: list[Finished]
     trouble: str | None
+    signal: KeyboardInterrupt | None = None
 
 
 class Cluster:
@@ -191,7 +193,7 @@ class Cluster:
     def stop_cases(self, limit: float) -> Stopped:
         """Stop every case: those handed to a worker end (a running one writes its files), the others
         are cancelled at once. Never raises: a scheduler gone, or a second Ctrl-C, cuts the wait short."""
-        trouble = None
+        trouble = signalled = None
         try:
             with _asking(self, "stopping its cases"):
                 self.stop.set()
@@ -203,8 +205,8 @@ class Cluster:
                     pass
         except ClusterError as exc:
             trouble = str(exc)
-        except KeyboardInterrupt:   # a second Ctrl-C or SIGTERM: no more waiting, what came back is kept
-            trouble = "stopping the cases was interrupted"
+        except KeyboardInterrupt as exc:   # a second Ctrl-C or SIGTERM: no more waiting, what came back is kept
+            trouble, signalled = "stopping the cases was interrupted", exc
         ended = []
         for future in list(self.pending):
             if future.status == "finished":
@@ -214,7 +216,7 @@ class Cluster:
             self.client.cancel(list(self.pending))
         except Exception:   # noqa: BLE001 — cancelling on a scheduler that may be gone: the client is closed next
             pass
-        return Stopped(sorted(ended, key=lambda f: f.index), trouble)
+        return Stopped(sorted(ended, key=lambda f: f.index), trouble, signalled)
 
     def close(self) -> None:
         if self.client is not None:

@@ -102,6 +102,8 @@ def run_campaign(campaign: Campaign, out: Path, cluster, progress=None, no_worke
             stopped = None
         if stopped is not None and stopped.trouble is not None:
             progress(f"campaign: {stopped.trouble}")
+        if stopped is not None and stopped.signal is not None:
+            outcome.interrupted = outcome.interrupted or interruption(stopped.signal)
         for done in stopped.ended if stopped is not None else ():
             if done.result is not None:
                 records[done.index] = record(cases[done.index], out, done.result, attempts=done.attempt)
