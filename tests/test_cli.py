@@ -193,6 +193,18 @@ def test_a_test_whose_run_fails_is_an_error_in_the_junit_file(write_scenario, tm
                                                  "before it could join")
 
 
+def test_a_test_of_a_scenario_that_does_not_load_is_an_error_in_the_junit_file(write_scenario, tmp_path):
+    """CI reads the report: a bad scenario is an error there, not a missing file (exit 3 still)."""
+    path = write_scenario("planthub: 1\nobjects:\n  b: {module: botle}\n")
+    proc = planthub("test", path, "--junit", tmp_path / "report.xml")
+    assert proc.returncode == 3
+    suite = ElementTree.parse(tmp_path / "report.xml").getroot().find("testsuite")
+    assert (suite.get("name"), suite.get("tests"), suite.get("errors")) == (path.stem, "1", "1")
+    (case,) = suite.findall("testcase")
+    assert case.get("name") == "the run"
+    assert f"{path}:3: objects.b.module: unknown module 'botle' (did you mean 'bottle'?)" in case.find("error").text
+
+
 def test_quiet_silences_the_notices_and_keeps_the_summary(tmp_path):
     args = ("run", "scenarios/stop_at_barrier.yaml", "--bus", "--set", "run.duration=1", "--out", tmp_path)
     loud, quiet = planthub(*args), planthub(*args, "-q")

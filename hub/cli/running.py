@@ -79,7 +79,16 @@ def test_command(args) -> int:
     from hub.run.simulation import Simulation
 
     scratch.sweep()   # what a hub killed before its clean-up left in the temporary folder
-    scenario = load_scenario(args.scenario, overrides(args))
+    try:
+        scenario = load_scenario(args.scenario, overrides(args))
+    except ScenarioError as exc:
+        # CI reads the XML: a scenario that does not load is an error there too, not a missing report.
+        if args.junit:
+            from hub.run.junit import write_junit
+
+            write_junit(args.junit, Path(args.scenario).stem, [], 0.0, timestamp=datetime.now().replace(microsecond=0),
+                        hostname=socket.gethostname(), properties=[("scenario", str(args.scenario))], error=str(exc))
+        raise
     if not scenario.expect:
         raise UsageError(f"{args.scenario} has no `expect:` entries to judge")
     if args.out is not None:
@@ -96,7 +105,7 @@ def test_command(args) -> int:
             interruption = sim.interruption
     except PlanthubError as exc:
         # CI reads the XML, not the exit code alone: a run that failed, so nothing could be judged,
-        # is an error there (a bad scenario was found before the run, on loading: exit 3, no XML).
+        # is an error there (a bad scenario was found before the run, on loading: written above).
         if args.junit and not isinstance(exc, ScenarioError):
             verdicts.junit([], error=str(exc))
         raise
