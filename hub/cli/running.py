@@ -97,7 +97,7 @@ def test_command(args) -> int:
     verdicts = _Verdicts(args, scenario)
     try:
         with Simulation(args.scenario, overrides(args), out=args.out, bus=bus, replay=args.replay,
-                        pacer=pacer, signals=True, on_emergency=verdicts.emergency,
+                        pacer=pacer, signals=True, on_emergency=verdicts.emergency, every_source=False,
                         **_checkpointing(args, scenario)) as sim:
             sim.run()
             outcomes = sim.check()

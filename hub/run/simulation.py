@@ -24,8 +24,10 @@ class Simulation:
             assert all(outcome.passed for outcome in sim.check())
 
     `overrides` take dotted keys as `--set` does; `logic` maps an object to a replacement FMU for
-    its state logic. Every source slot is computed (not only the ones flows and the recording
-    read), so any slot can be read at any point. `out` writes recording.csv and events.csv, and
+    its state logic. Every source slot is computed (not only the ones flows, the recording and
+    the expectations read), so any slot can be read at any point; `every_source=False` computes
+    only those (`planthub test`: the bottling plant's 60 s cost 6.6 s of wall time with every
+    bottle's slots, 4.6 s without). `out` writes recording.csv and events.csv, and
     summary.json when the simulation is closed. `summary()` gives the run summary at any point:
     for a plant (sinks, sources) bottles in, delivered, misrouted, on the line, throughput, jams.
     The other keywords are those of hub.run.assembly.Run (`bus`, `replay`, `pacer`, `log`,
@@ -35,14 +37,14 @@ class Simulation:
     """
 
     def __init__(self, scenario, overrides: dict | None = None, logic: dict | None = None,
-                 out: Path | None = None, on_emergency=None, **run_options):
+                 out: Path | None = None, on_emergency=None, every_source: bool = True, **run_options):
         changes = dict(overrides or {})
         for name, file in (logic or {}).items():
             changes[f"objects.{name}.logic"] = {"file": str(Path(file).resolve())}
         self.scenario = load_scenario(scenario, changes)
         self.out = out
         self.events: list[tuple[float, str, str]] = []   # the event log: (time, slot, detail)
-        self._run = Run(self.scenario, out=out, every_source=True, observers=[_EventLog(self)], **run_options)
+        self._run = Run(self.scenario, out=out, every_source=every_source, observers=[_EventLog(self)], **run_options)
         self.watcher = self._run.watcher
         try:
             self.plant = self._run.plant
