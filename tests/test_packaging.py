@@ -55,15 +55,17 @@ def copy_clone(target: Path) -> Path:
 
 
 def wheelhouse() -> Path:
-    """Every pinned wheel the install needs, runtime and build, downloaded once per set of pins."""
+    """Every pinned wheel the install needs, runtime and build, downloaded once per set of pins;
+    a pin published only as source (greenery, which cpppo needs) built into a wheel there, since
+    the install takes nothing from the index to build it."""
     build = tomllib.loads((ROOT / "pyproject.toml").read_text())["build-system"]["requires"]
-    pins = (ROOT / "requirements.txt").read_text() + "\n".join(build)
+    pins = "pip wheel\n" + (ROOT / "requirements.txt").read_text() + "\n".join(build)
     stamp = CACHE / f"complete-{hashlib.sha256(pins.encode()).hexdigest()[:16]}"
     CACHE.mkdir(parents=True, exist_ok=True)
     with open(CACHE / ".lock", "w") as lock:   # two test runs at once download once
         fcntl.flock(lock, fcntl.LOCK_EX)
         if not stamp.exists():
-            _run([sys.executable, "-m", "pip", "download", "--quiet", "--dest", CACHE,
+            _run([sys.executable, "-m", "pip", "wheel", "--quiet", "--wheel-dir", CACHE,
                   "-r", ROOT / "requirements.txt", *build], env=_clean_env())
             stamp.touch()
     return CACHE
