@@ -279,6 +279,11 @@ def test_an_operator_takes_a_checkpoint_of_a_running_plant(tmp_path):
         with Run(load_scenario(name), out=tmp_path / "resumed", resume=(checkpoint.read(saved), str(saved))) as resumed:
             resumed.run()
             assert resumed.resumed.tick == answer["tick"]
+        # A replay goes past it: the same commands, no checkpoint written.
+        with Run(load_scenario(name), out=tmp_path / "replayed", replay=tmp_path / "live") as replayed:
+            replayed.run()
+        assert (tmp_path / "replayed" / "commands.csv").read_bytes() == (tmp_path / "live" / "commands.csv").read_bytes()
+        assert not (tmp_path / "replayed" / "checkpoints").exists()
         with Run(load_scenario(name), bus=bus) as run, Viewer("switch", bus.endpoints) as operator:
             run.start()
             asked = operator.command("checkpoint", wait=None)

@@ -42,7 +42,6 @@ class Registry:
             self._loaded[name] = load_entry(self._entries[name])
         return self._loaded[name]
 
-
     def suggest(self, name: str) -> str:
         """` (did you mean 'x'?)` for the closest name; else for the modules whose one-line
         description names the thing in its first words (a `belt` is a conveyor, a curve, …); else
