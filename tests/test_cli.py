@@ -205,6 +205,18 @@ def test_a_test_of_a_scenario_that_does_not_load_is_an_error_in_the_junit_file(w
     assert f"{path}:3: objects.b.module: unknown module 'botle' (did you mean 'bottle'?)" in case.find("error").text
 
 
+def test_a_plants_event_table_is_listed_with_v(tmp_path):
+    """More kinds of event than the summary lists one a line (the bottling plant's) are counted;
+    -v lists them."""
+    args = ("run", "scenarios/bottling_plant.yaml", "--set", "run.duration=30")
+    plain, verbose = planthub(*args, "--out", tmp_path / "plain"), planthub(*args, "--out", tmp_path / "v", "-v")
+    assert plain.returncode == verbose.returncode == 0, plain.stderr + verbose.stderr
+    (events,) = [line for line in plain.stdout.splitlines() if line.startswith("  events ")]
+    assert events.endswith("slots, listed with -v and in events.csv)")
+    assert "×  first at" not in plain.stdout
+    assert sum("×  first at" in line for line in verbose.stdout.splitlines()) > 12
+
+
 def test_quiet_silences_the_notices_and_keeps_the_summary(tmp_path):
     args = ("run", "scenarios/stop_at_barrier.yaml", "--bus", "--set", "run.duration=1", "--out", tmp_path)
     loud, quiet = planthub(*args), planthub(*args, "-q")

@@ -9,6 +9,9 @@ from hub.core.observer import SummarySection
 from hub.logic.component import LogicComponent
 from hub.run.ending import Ending
 
+#: The most kinds of event the printed summary lists one a line without -v (the bottling plant has 70).
+TABLE_ROWS = 12
+
 
 def logic_components(components) -> frozenset[str]:
     """`object.component` of every component that is logic, not plant: a LogicComponent (an FMU,
@@ -85,6 +88,9 @@ class RunSummary:
         shown = {k: s for k, s in self.events.items() if verbose or not self.is_logic(k)}
         hidden = sum(s.count for k, s in self.events.items() if k not in shown)
         note = f"  ({hidden} of them inside the logic, listed with -v)" if hidden else ""
+        if not verbose and len(shown) > TABLE_ROWS:   # a plant's table would bury the summary
+            note = f"  (from {len(self.events)} slots, listed with -v and in events.csv)"
+            shown = {}
         out.append(f"  events       {sum(s.count for s in self.events.values())}{note}")
         width = max((len(k) for k in shown), default=0)
         for slot, stats in shown.items():
