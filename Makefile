@@ -46,8 +46,9 @@ view: $(STAMP) fmus view-assets
 view-assets: $(VIEW_STAMP)
 
 $(VIEW_STAMP): $(VIEW_SOURCES)
-	cd hub/view/web && npm ci --no-audit --no-fund && npm run build
-	touch $@
+	@echo "building the view's page (npm ci, esbuild)"
+	@cd hub/view/web && npm ci --no-audit --no-fund --loglevel=error && npm run --silent build
+	@touch $@
 
 # The browser the view's test drives (Playwright launches it; it never downloads one of its own).
 chromium: $(CHROMIUM)
@@ -70,7 +71,7 @@ screenshot: $(STAMP) fmus view-assets chromium
 	$(PY) -m tests.screenshot_view hub/view/bottling_plant.png
 
 fmus: $(STAMP)
-	@if [ -f fmus/Makefile ]; then $(MAKE) --no-print-directory -C fmus PYTHON=$(abspath $(PY)) BUILD=$(abspath build/fmus); fi
+	@if [ -f fmus/Makefile ]; then $(MAKE) -s --no-print-directory -C fmus PYTHON=$(abspath $(PY)) BUILD=$(abspath build/fmus); fi
 
 venv: $(STAMP)
 
