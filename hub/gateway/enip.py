@@ -28,6 +28,7 @@ from cpppo.server.enip.main import main as enip_main
 from hub.core.errors import PlanthubError
 from hub.core.slots import SlotType
 from hub.gateway.image import ProcessImage
+from hub.gateway.server_thread import refuse_taken
 from hub.gateway.tags import OUTPUT, Tag
 
 PRIVILEGE_VIOLATION, INVALID_VALUE = 0x0F, 0x09
@@ -51,7 +52,7 @@ class EnipServer:
         self.loggers = {}   # cpppo's loggers as they were before start: (level, propagate), restored by stop
 
     async def start(self) -> None:
-        self._probe()
+        refuse_taken(self.host, self.port, f"EtherNet/IP server at {self.host}:{self.port} did not start")
         for name in (*_CPPPO_LOGS, *_REFUSING):
             logger = logging.getLogger(name)
             self.loggers[name] = logger.level, logger.propagate
@@ -85,16 +86,6 @@ class EnipServer:
                 if not self.thread.is_alive() or time.monotonic() > deadline:
                     raise PlanthubError(f"EtherNet/IP server at {self.host}:{self.port} did not start: {exc}") from None
                 time.sleep(0.05)
-
-    def _probe(self) -> None:
-        """Refuse a taken endpoint: the wait for cpppo to listen would connect to whatever holds it."""
-        with socket.socket() as probe:
-            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)   # TIME_WAIT of a stopped gateway is no owner
-            try:
-                probe.bind((self.host, self.port))
-            except OSError as exc:
-                raise PlanthubError(f"EtherNet/IP server at {self.host}:{self.port} did not start: "
-                                    f"{exc.strerror or exc} (another gateway or server holds the port?)") from None
 
     async def publish(self, changed: dict) -> None:
         """Nothing to do: every read is answered from the image."""

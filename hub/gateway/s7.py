@@ -19,7 +19,6 @@ python-snap7 3.3.0's server has no hook for writes (its `set_rw_area_callback` i
 from __future__ import annotations
 
 import logging
-import socket
 import struct
 
 from snap7.datatypes import S7Area, S7WordLen
@@ -30,6 +29,7 @@ from snap7.type import SrvArea
 from hub.core.errors import PlanthubError
 from hub.core.slots import SlotType
 from hub.gateway.image import ProcessImage
+from hub.gateway.server_thread import refuse_taken
 from hub.gateway.tags import OUTPUT, S7_AREAS, S7_DB, S7_DB_NUMBER, S7_MARKERS, Tag
 
 _AREAS = {S7_AREAS["input"]: (SrvArea.PE, S7Area.PE, 0), S7_AREAS["output"]: (SrvArea.PA, S7Area.PA, 0),
@@ -66,23 +66,12 @@ class S7Server:
         for tag in self.tags:
             self._store(tag, self.image.read(tag.slot))
         server.host = self.host
-        self._probe()
+        refuse_taken(self.host, self.port, f"the S7 server could not listen at {self.host}:{self.port}")
         try:
             server.start(tcp_port=self.port)
         except S7Error as exc:
             raise PlanthubError(f"the S7 server could not listen at {self.host}:{self.port}: {exc}") from None
         self.server = server
-
-    def _probe(self) -> None:
-        """Refuse a taken endpoint: snap7 binds with SO_REUSEPORT, so a second gateway (or a stale one)
-        on the same port would bind beside the first and share its PLC's connections silently."""
-        with socket.socket() as probe:
-            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)   # TIME_WAIT of a stopped gateway is no owner
-            try:
-                probe.bind((self.host, self.port))
-            except OSError as exc:
-                raise PlanthubError(f"the S7 server could not listen at {self.host}:{self.port}: "
-                                    f"{exc.strerror or exc} (another gateway or server holds the port?)") from None
 
     async def publish(self, changed: dict) -> None:
         for slot in sorted(changed, key=lambda s: s == "cycle"):   # the scan's number last: then all is there

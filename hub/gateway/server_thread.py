@@ -4,12 +4,25 @@ from __future__ import annotations
 
 import asyncio
 import concurrent.futures
+import socket
 import threading
 
 from hub.core.errors import PlanthubError
 
 START_LIMIT = 20.0   # s for a server to bind its endpoint and build its address space
 CALL_LIMIT = 5.0     # s for anything else asked of it
+
+
+def refuse_taken(host: str, port: int, failed: str) -> None:
+    """Raise PlanthubError("{failed}: cause (…)") when the endpoint is taken: a server that binds with
+    SO_REUSEPORT (snap7) would share it silently, one that is waited for (cpppo) would be taken for
+    whatever holds it. A stopped gateway's TIME_WAIT is no owner."""
+    with socket.socket() as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            probe.bind((host, port))
+        except OSError as exc:
+            raise PlanthubError(f"{failed}: {exc.strerror or exc} (another gateway or server holds the port?)") from None
 
 
 class ServerThread:
