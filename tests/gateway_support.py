@@ -43,6 +43,22 @@ def plc(module: str, *args, limit: float = 240.0):
             proc.communicate()
 
 
+def run_beside_client(scenario, out, code: str):
+    """`planthub run SCENARIO --realtime --out OUT` with a client process (`python -c CODE`) beside
+    it; the client has a minute after the run to end, and is killed if it has not. (run, client)."""
+    client = subprocess.Popen([sys.executable, "-c", code], cwd=ROOT)
+    try:
+        run = subprocess.run([sys.executable, "-m", "hub", "run", str(scenario), "--realtime", "--out", str(out)],
+                             capture_output=True, text=True, cwd=ROOT, timeout=120)
+    finally:
+        try:
+            client.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            client.kill()
+            client.wait()
+    return run, client
+
+
 def bottling_via_gateway(tmp, protocol: str | None, duration: float, *gateway_args):
     """The bottling plant for `duration` s, routed by a PLC client process through `planthub gateway
     PROTOCOL` (None: by the routing participant over Zenoh, as `make run` does); (run folder, the

@@ -24,7 +24,7 @@ from hub.gateway.tags import tag_map
 from hub.scenario.checker import load_scenario
 
 from .bus_support import hub
-from .gateway_support import BOTTLING, free_port
+from .gateway_support import BOTTLING, free_port, run_beside_client
 from .helpers import ROOT
 from .test_gateway import belt_scenario
 
@@ -64,17 +64,7 @@ def test_the_launched_gateways_refusals_reach_the_hub_console_and_the_run_folder
     port = free_port()
     path = belt_scenario(tmp_path, launch=["hub", "gateway", "s7", "belt_plc.yaml", "--object", "plc",
                                            "--endpoint", f"127.0.0.1:{port}", "--sync", "live"])
-    client = subprocess.Popen([sys.executable, "-c", WRITER % port], cwd=ROOT)
-    try:
-        proc = subprocess.run([sys.executable, "-m", "hub", "run", str(path), "--realtime", "--out", str(tmp_path / "run")],
-                              capture_output=True, text=True, cwd=ROOT, timeout=120)
-    finally:
-        try:
-            client.wait(timeout=60)
-        finally:
-            if client.poll() is None:   # still trying after the run: not left behind
-                client.kill()
-                client.wait()
+    proc, _ = run_beside_client(path, tmp_path / "run", WRITER % port)
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert REFUSAL in proc.stderr and "participant 'plc' said (all" in proc.stderr
     assert REFUSAL in (tmp_path / "run" / "plc.log").read_text()

@@ -24,7 +24,7 @@ from hub.gateway.server_thread import ServerThread
 from hub.gateway.tags import tag_map
 from hub.scenario.checker import load_scenario
 
-from .gateway_support import free_port
+from .gateway_support import free_port, run_beside_client
 from .helpers import ROOT, planthub
 from .test_gateway import belt_scenario
 
@@ -223,16 +223,7 @@ def test_planthub_gateway_with_a_certificate_serves_the_plant_to_a_trusted_plc(t
               "    await c.get_node(ua.NodeId('belt.run', ns)).write_value(ua.Variant(True, ua.VariantType.Boolean))\n"
               "    await c.disconnect()\n"
               "asyncio.run(main())\n") % (endpoint, PLC_URI, str(plc_cert[0]), str(plc_cert[1]))
-    client = subprocess.Popen([sys.executable, "-c", writer], cwd=ROOT)
-    try:
-        proc = subprocess.run([sys.executable, "-m", "hub", "run", str(path), "--realtime", "--out", str(tmp_path / "run")],
-                              capture_output=True, text=True, cwd=ROOT, timeout=120)
-    finally:
-        try:
-            client.wait(timeout=60)
-        except subprocess.TimeoutExpired:
-            client.kill()
-            client.wait()
+    proc, client = run_beside_client(path, tmp_path / "run", writer)
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert client.returncode == 0
     with open(tmp_path / "run" / "recording.csv", newline="") as f:
