@@ -5,8 +5,6 @@ refused; each unusable certificate, key or trusted certificate is named with its
 import asyncio
 import csv
 import dataclasses
-import subprocess
-import sys
 
 import pytest
 from asyncua import Client, ua
@@ -25,7 +23,7 @@ from hub.gateway.tags import tag_map
 from hub.scenario.checker import load_scenario
 
 from .gateway_support import free_port, run_beside_client
-from .helpers import ROOT, planthub
+from .helpers import planthub
 from .test_gateway import belt_scenario
 
 SERVER_URI, PLC_URI = "urn:planthub:test:gateway", "urn:planthub:test:plc"
