@@ -378,3 +378,24 @@ def test_an_fmus_description_is_read_once_per_load(fmus, tmp_path, monkeypatch):
         archive.writestr("documentation/note.txt", "rebuilt")
     load_scenario(scene)
     assert len(reads) == 2
+
+
+def test_an_event_into_a_boolean_names_events_or_constant(fmus, write_scenario):
+    """A void source into a Boolean target: an FMU's input is told to be listed in `events:`
+    (by its variable's name, not its mapped slot's), any other target is told of `constant`."""
+    path = write_scenario(f"""
+        planthub: 1
+        objects:
+          belt: {{module: conveyor, position: [0, 0, 0], length: 2}}
+          barrier: {{module: light_barrier, position: [1, 0, 0.05]}}
+          drive: {{module: fmu, file: {fmus / 'belt_drive-fmi2.fmu'}, map: {{run: go}}}}
+        flows:
+          - {{from: barrier.trigger.on_enter, to: drive.logic.go}}
+          - {{from: barrier.trigger.on_enter, to: belt.drive.run}}
+        """)
+    assert problems(path) == [
+        f"{path}:7: flows[0]: type mismatch: barrier.trigger.on_enter is void but drive.logic.go is bool "
+        f"(an FMU's Boolean is an event when listed in its `events:`: add 'run' to objects.drive.events)",
+        f"{path}:8: flows[1]: type mismatch: barrier.trigger.on_enter is void but belt.drive.run is bool "
+        f"(an event carries no value: a `constant` object's value.set turns it into one)",
+    ]

@@ -464,11 +464,31 @@ class _Checker:
                     self.problem(at + ("rearm",), "only a singular flow can be re-armed (add mode: singular)")
                 rearm = r[0] if r else None
             if src and tgt and src[1].type is not tgt[1].type:
-                self.problem(at, f"type mismatch: {src[0]} is {src[1].type.value} but {tgt[0]} is {tgt[1].type.value}")
+                self.problem(at, f"type mismatch: {src[0]} is {src[1].type.value} but {tgt[0]} is {tgt[1].type.value}"
+                                 f"{self.event_hint(src, tgt)}")
             elif src and tgt:
                 out.append(FlowSpec(src[0], tgt[0], src[1].type, Condition(spec.get("when", "source")),
                                     mode, rearm, line_of(self.lines, at)))
         return out
+
+    def event_hint(self, src: tuple, tgt: tuple) -> str:
+        """How to join an event (void) and a Boolean, said after their type mismatch; "" for other pairs.
+
+        An FMU's Boolean variable is a void slot once it is listed in the object's `events`; any other
+        event becomes a value through a `constant` object fed by it."""
+        if {src[1].type, tgt[1].type} != {SlotType.VOID, SlotType.BOOL}:
+            return ""
+        boolean = src if src[1].type is SlotType.BOOL else tgt
+        obj = boolean[0].obj
+        spec = self.data["objects"][obj]
+        if spec.get("module") == "fmu":
+            renamed = {slot: var for var, slot in (spec.get("map") or {}).items()}
+            variable = renamed.get(boolean[0].slot, boolean[0].slot)
+            return (f" (an FMU's Boolean is an event when listed in its `events:`: add {variable!r} to "
+                    f"objects.{obj}.events)")
+        if src[1].type is SlotType.VOID:
+            return " (an event carries no value: a `constant` object's value.set turns it into one)"
+        return ""
 
     def record(self, specs: list, tables: dict):
         out = []
