@@ -10,6 +10,10 @@ point, recorded with its tick in `commands.csv`, and replayed from there bit for
   the run's control (hub/run/hold.py). They change when points are computed, never what: a
   replay ignores them and gives the same recording. While paused, they are taken at once; other
   commands wait for the next point.
+- `fault`, `repair`: a fault begins or ends (hub/scenario/faults.py; the scenario's `faults:`,
+  put in by their schedule, hub/run/faults.py). Its value is the fault as a map (name, kind and
+  its parameters), its slot the part it acts on. Recorded like the others, so a replay applies
+  the same faults at the same points without scheduling them again.
 - `checkpoint`: the run is saved at the next point into its folder's `checkpoints/TICK.ckpt`
   (hub/run/checkpoint.py). Like the run's control it changes nothing the run computes: recorded
   and noted, and a replay goes past it.
@@ -32,7 +36,8 @@ from hub.core.registry import did_you_mean
 from hub.core.slots import Direction, SlotType
 from hub.bus import wire
 
-OPS = ("set", "force", "release", "stop", "pause", "resume", "step", "pace", "checkpoint")
+OPS = ("set", "force", "release", "stop", "pause", "resume", "step", "pace", "checkpoint", "fault", "repair")
+FAULTS = ("fault", "repair")   # a fault's begin and end: hub/run/faults.py
 CONTROL = ("pause", "resume", "step", "pace")   # the run's control: hub/run/hold.py
 MAX_STEPS = 100_000   # points one `step` may ask for
 MAX_PACE = 1000.0     # the fastest pace one may ask for, × real time
@@ -51,7 +56,7 @@ class Command:
 
     def value_text(self, kind: SlotType | None) -> str:
         """The value as JSON (empty where there is none), exact for every double."""
-        if self.op in ("step", "pace"):
+        if self.op in ("step", "pace", *FAULTS):
             return json.dumps(self.value)
         if self.op in ("release", "stop") or kind in (None, SlotType.VOID):
             return ""
@@ -94,6 +99,7 @@ class Commands:
         self.control = None        # the run's control (hub/run/hold.py Hold): pause, resume, step, pace
         self.on_checkpoint = None  # asks for a checkpoint at this point (hub/run/checkpoint.py Checkpointer.request)
         self.stop_requested = False
+        self.faults = None         # applies `fault` and `repair` (hub/run/faults.py FaultBook); None: refused
 
     def stop(self, tick: int) -> Stop | None:
         """A stop condition (hub/core/observer.py): an operator's `stop` ends the run at its point."""
@@ -116,6 +122,10 @@ class Commands:
             raise CommandError(f"`by` must be a string of at most {MAX_NAME} characters, got {_shown(by)}")
         if op in ("stop", "pause", "resume", "checkpoint"):
             return Command(op, by=by)
+        if op in FAULTS:
+            if self.faults is None:
+                raise CommandError(f"{op}: this run takes no faults")
+            return self.faults.parse(message)
         if op == "step":
             count = message.get("value", 1)
             if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= MAX_STEPS:
@@ -176,6 +186,11 @@ class Commands:
                 due += self._live(tick)
         rows = []
         for command in due:
+            if command.op in FAULTS:
+                (self.faults.begin if command.op == "fault" else self.faults.end)(tick, command)
+                self.recorder.command(tick, command.op, command.slot, command.value_text(None), command.by)
+                rows.append((tick, "@fault", command.describe(None)))
+                continue
             kind = self.slots[command.slot][1].type if command.slot else None
             if command.op == "stop":
                 self.stop_requested = True
@@ -196,14 +211,27 @@ class Commands:
                 if command.op == "set":
                     self._once.append((index, command.value))
                 elif command.op == "force":
-                    self._forced[index] = command.value
+                    self.hold(index, command.value)
                 else:
-                    self._forced.pop(index, None)
-                    if index in self._own:
-                        self._released[index] = self._own.pop(index)
+                    self.let_go(index)
             self.recorder.command(tick, command.op, command.slot, command.value_text(kind), command.by)
             rows.append((tick, command.slot or "@run", command.describe(kind)))
         return rows
+
+    def hold(self, index: int, value) -> None:
+        """Force slot `index` to `value` at every point from this one on (`force`; a fault)."""
+        self._forced[index] = value
+
+    def let_go(self, index: int) -> None:
+        """End a force: the slot has again what the plant gives it (`release`; a fault's end)."""
+        self._forced.pop(index, None)
+        if index in self._own:
+            self._released[index] = self._own.pop(index)
+
+    def inject(self, command: Command) -> None:
+        """A command from inside the hub (a scheduled fault), applied at this point: given before
+        `take` (hub/run/faults.py FaultSchedule is the manipulator before this one)."""
+        self._waiting.append(command)
 
     def _live(self, tick: int, first=()) -> list[Command]:
         """The live commands waiting in the inbox (after those in `first`), checked and answered
@@ -263,9 +291,14 @@ class Commands:
 
         A forced slot keeps, aside, what the plant gives it meanwhile — a flow's write to a target,
         a component's emit of a source — and `release` hands that back: the slot then has the value
-        it would have had without the force, not the forced one (hub/bus/commands.py, README)."""
-        if not (self._once or self._forced or self._released):
-            return
+        it would have had without the force, not the forced one (hub/bus/commands.py, README).
+        Then the faults in effect do what they do to this direction's slots (hub/run/faults.py)."""
+        if self._once or self._forced or self._released:
+            self._apply(signals, direction)
+        if self.faults is not None:
+            self.faults.apply(signals, direction)
+
+    def _apply(self, signals, direction: Direction) -> None:
         written = signals.updated if direction is Direction.TARGET else signals.active
         for index, value in list(self._released.items()):
             if signals.slots[index].direction is direction:
@@ -296,8 +329,9 @@ class Commands:
             self._once.clear()
 
 
-def load_commands(run_dir: Path, plant) -> list[tuple[int, Command]]:
-    """The commands a run recorded (`RUN_DIR/commands.csv`; none if it has no such file)."""
+def load_commands(run_dir: Path, plant, faults=None) -> list[tuple[int, Command]]:
+    """The commands a run recorded (`RUN_DIR/commands.csv`; none if it has no such file);
+    `faults` checks its faults (hub/run/faults.py FaultBook; without, a fault is refused)."""
     run_dir = Path(run_dir)
     if not (run_dir / "recording.csv").is_file() and not (run_dir / "events.csv").is_file():
         raise CommandError(f"{run_dir}: not a run folder (no recording.csv or events.csv)")
@@ -305,6 +339,7 @@ def load_commands(run_dir: Path, plant) -> list[tuple[int, Command]]:
     if not path.is_file():
         return []
     checker = Commands(plant, recorder=None)
+    checker.faults = faults
     out = []
     with open(path, newline="", encoding="utf-8") as handle:
         for line, row in enumerate(csv.DictReader(handle), start=2):

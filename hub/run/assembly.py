@@ -75,8 +75,20 @@ class Run:
                 stops = [self.interruption, *stops]
             # Imported here: replaying needs the bus package's command parser, not a bus.
             from hub.bus.commands import Commands, load_commands
-            commands = Commands(plant, self.recorder, load_commands(replay, plant)) if replay is not None else None
+            from hub.run.faults import FaultBook, FaultSchedule
+            # Faults begin and end as commands (hub/run/faults.py): the scenario's schedule gives
+            # them to a Commands of their own; a replay's recorded commands hold them instead.
+            self.faults = FaultBook(plant)
+            commands = Commands(plant, self.recorder, load_commands(replay, plant, self.faults)) \
+                if replay is not None else None
             self.commands = commands
+            manipulators = [commands] if commands is not None else []
+            if commands is not None:
+                self.faults.attach(commands)
+            elif scenario.faults:
+                scheduled = Commands(plant, self.recorder)
+                self.faults.attach(scheduled)
+                manipulators = [FaultSchedule(plant, scenario.faults, scheduled), scheduled]
             self.contributed = _contributions(scenario, plant)
             self.bodies = None   # the body recording, for playback (run.record_bodies)
             if self.out is not None and scenario.run.record_bodies:
@@ -106,7 +118,7 @@ class Run:
                 observers=[self.recorder, *([self.bodies] if self.bodies else []), *([self.link] if self.link else []),
                            *[c for c in watchers if isinstance(c, Observer)]],
                 stops=[*[c for c in self.contributed if isinstance(c, StopCondition)], *stops],
-                manipulators=[commands] if commands is not None else [],
+                manipulators=manipulators,
                 pacer=pacer)
         except BaseException:
             self._close_parts("the run could not be built")

@@ -46,6 +46,7 @@ class Plant:
             self.signals = Signals(slots)
             read = {f.source for f in scenario.flows} | {f.rearm for f in scenario.flows if f.rearm}
             read |= {ref for ref, _ in scenario.record}
+            read |= {f.event for f in scenario.faults if f.event is not None}   # what starts a fault (hub/run/faults.py)
             read |= {ref for e in scenario.expect if isinstance(e, Expectation)
                      for ref in (e.slot, e.when, e.show) if ref is not None}
             # The one place that says which sources a component computes (Component.needed): those

@@ -13,6 +13,8 @@ from hub.core import flowgraph
 from hub.core.errors import Problem, ScenarioError
 from hub.core.resources import SCHEMAS
 from hub.scenario.expectations import Expectation, NoJam
+from hub.scenario.exercise import check_exercise
+from hub.scenario.faults import check_faults
 from hub.core.flow import Condition, Mode
 from hub.core.logic_spec import OPTIONS as LOGIC_OPTIONS
 from hub.core.logic_spec import fmu_parameters
@@ -216,11 +218,14 @@ class _Checker:
         record = self.record(_list(data.get("record")), slot_tables)
         plant = is_plant(objects)
         expect = self.expectations(_list(data.get("expect")), slot_tables, run, plant)
+        faults = check_faults(self, _list(data.get("faults")), slot_tables, run)
+        exercise = check_exercise(self, data.get("exercise"), plant)
         order = self.order(flows, objects)
         if self.problems:
             raise ScenarioError(self.problems)
         return Scenario(self.path, data.get("name", self.path.stem), data.get("description", ""),
-                        run, tuple(objects), tuple(flows), tuple(record), tuple(expect), order)
+                        run, tuple(objects), tuple(flows), tuple(record), tuple(expect), order,
+                        tuple(faults), exercise)
 
     def run_settings(self, run: dict) -> RunSettings:
         def setting(key, default, kind=(int, float)):

@@ -1,4 +1,4 @@
-"""The checked scenario: run settings, objects, flows, recorded slots and expectations — everything the plant builder needs, nothing left to validate."""
+"""The checked scenario: run settings, objects, flows, recorded slots, expectations, faults and exercise — everything the plant builder needs, nothing left to validate."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -68,6 +68,8 @@ class Scenario:
     record: tuple[tuple[SlotRef, SlotType], ...]
     expect: tuple[Expectation, ...]
     order: tuple[tuple[str, object], ...]   # evaluation order of flows and feedthrough components
+    faults: tuple = ()        # hub/scenario/faults.py FaultSpec: faults on a schedule
+    exercise: object = None   # hub/scenario/exercise.py Exercise: the task, goals and score; None: no exercise
 
     @property
     def is_plant(self) -> bool:

@@ -1,0 +1,307 @@
+"""Faults in a run: what each kind does to the plant's slots (FaultBook), and the schedule that starts and ends the scenario's faults (FaultSchedule).
+
+A fault begins and ends as an operator command (`fault`, `repair`: hub/bus/commands.py), so it is
+recorded in commands.csv and events.csv (slot `@fault`) with its tick, and a replay applies the
+recorded commands at the same points instead of scheduling the faults again: the same files, bit
+for bit. What a kind does, at the points while it lasts (hub/scenario/faults.py says which
+targets fit):
+
+- `sensor_stuck` — `value: true`: `occupied` is true and `on_stay` fires at every point,
+  `on_enter` fires at the first, and nothing else the sensor gives (`on_leave`, the id) goes
+  out; `false`: `occupied` is false and nothing else goes out. When it ends, the edge the
+  sensor missed is given: `on_leave` if it was stuck on and is free, `on_enter` if it was stuck
+  off and sees a bottle. The event log still lists the bottles that physically entered and
+  left (the world's truth); the fault's own rows say when the sensor lied.
+- `belt_failure` — the drive's `speed` is forced (as `force` does) to `speed` × what it was at
+  the fault's start; the belt still says it runs. At the end the drive gets back what its
+  logic gave it meanwhile (as `release` does).
+- `part_stuck` — the part's targets take no commands (their writes are dropped before it
+  actuates): a switch blade, a gate or a stopper stays where it is (a move under way ends).
+- `reader_fault` — `reads: nothing`: the reader's entry (`on_enter`, `object`, `destination`,
+  `filled`, `capped`) does not go out; `reads: wrong`: each entry goes out with the given
+  `destination` and `id`.
+- `logic_dead` — nothing of the logic component's outputs goes out (no events, values frozen
+  at what they were at the start). The logic itself still steps (a participant's process is not
+  killed: that would end a run by its lease, at no tick a replay could reproduce); when the
+  fault ends its outputs reach the plant again, from the state it stepped to.
+
+Effects are applied last at their direction's step of the point, after the operator's
+forces (hub/run/master.py, steps 1 and 2).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from hub.bus.commands import MAX_NAME, Command, CommandError
+from hub.core.slots import Direction, SlotRef
+from hub.scenario.faults import KINDS, check_values, target_component
+
+
+@dataclass
+class Started:
+    """A fault that began: its name, kind, target, and ticks (end None: still in effect)."""
+
+    name: str
+    kind: str
+    target: str
+    start: int
+    end: int | None = None
+
+
+class FaultBook:
+    """The faults in effect in a run and what they do: the `fault` and `repair` commands' hook
+    (Commands.faults), over the plant's slot numbers."""
+
+    def __init__(self, plant):
+        self.plant = plant
+        self.signals = plant.signals
+        self.commands = None   # the Commands whose forces a belt failure uses (attach)
+        tables: dict[str, dict] = {}
+        self._slots: dict[tuple[str, str], dict[str, int]] = {}
+        for ref, index in plant.index.items():
+            tables.setdefault(ref.obj, {})[(ref.component, ref.slot)] = plant.signals.slots[index]
+            self._slots.setdefault((ref.obj, ref.component), {})[ref.slot] = index
+        self._tables = tables
+        self._owners = {(c.obj, c.name): c for c in plant.components}
+        self.active: dict[str, _Effect] = {}
+        self._ending: list[_Effect] = []   # ended at this point: their last word at the next SOURCE step
+        self.log: list[Started] = []
+
+    def attach(self, commands) -> None:
+        commands.faults = self
+        self.commands = commands
+
+    # --- commands ----------------------------------------------------------------------------
+    def parse(self, message: dict) -> Command:
+        """A `fault` or `repair` command message checked against this plant, or CommandError."""
+        op, by, value = message["op"], message.get("by", ""), message.get("value")
+        if not isinstance(value, dict) or not isinstance(value.get("name"), str) or \
+                not 0 < len(value["name"]) <= MAX_NAME:
+            raise CommandError(f"{op}: its value is a map with the fault's `name` (a string of at most {MAX_NAME} "
+                               f"characters), got {str(value)[:80]}")
+        if op == "repair":
+            if set(value) != {"name"}:
+                raise CommandError(f"repair: its value names the fault only, got keys {sorted(value)}")
+            return Command("repair", str(message.get("slot", ""))[:MAX_NAME], {"name": value["name"]}, by)
+        kind, target = value.get("kind"), message.get("slot")
+        if kind not in KINDS:
+            raise CommandError(f"fault: kind must be one of {', '.join(KINDS)}, got {str(kind)[:80]}")
+        if not isinstance(target, str) or len(target) > MAX_NAME:
+            raise CommandError(f"fault: its slot is the part it acts on (object.component), got {str(target)[:80]}")
+        found, why = target_component(kind, target, self._tables)
+        if found != target:
+            raise CommandError(f"fault {value['name']}: {why or f'name the component: {found}'}")
+        problems = []
+        params = {k: v for k, v in value.items() if k not in ("name", "kind")}
+        made = check_values(kind, params, (), lambda path, text: problems.append(text))
+        unknown = set(params) - {"value", "speed", "reads", "destination", "id"}
+        if not problems and unknown:
+            problems.append(f"unknown parameter {sorted(unknown)[0]!r}")
+        if not problems:
+            problems += _bad_types(made)
+        if problems:
+            raise CommandError(f"fault {value['name']}: {problems[0]}")
+        return Command("fault", target, {"name": value["name"], "kind": kind, **made}, by)
+
+    def begin(self, tick: int, command: Command) -> None:
+        name = command.value["name"]
+        if name in self.active:
+            self._stop(tick, name)
+        obj, comp = command.slot.split(".")
+        effect = _EFFECTS[command.value["kind"]](self, obj, comp, command.value)
+        self.active[name] = effect
+        self.log.append(Started(name, command.value["kind"], command.slot, tick))
+        effect.begin()
+
+    def end(self, tick: int, command: Command) -> None:
+        if command.value["name"] in self.active:
+            self._stop(tick, command.value["name"])
+
+    def _stop(self, tick: int, name: str) -> None:
+        effect = self.active.pop(name)
+        effect.end()
+        self._ending.append(effect)
+        for started in reversed(self.log):
+            if started.name == name and started.end is None:
+                started.end = tick
+                break
+
+    # --- at a communication point -------------------------------------------------------------
+    def apply(self, signals, direction: Direction) -> None:
+        if direction is Direction.SOURCE and self._ending:
+            for effect in self._ending:
+                effect.after(signals)
+            self._ending.clear()
+        for effect in self.active.values():
+            effect.apply(signals, direction)
+
+    def slots(self, obj: str, comp: str) -> dict[str, int]:
+        return self._slots[(obj, comp)]
+
+    def component(self, obj: str, comp: str):
+        return self._owners[(obj, comp)]
+
+
+def _bad_types(params: dict) -> list[str]:
+    checks = {"value": (bool,), "speed": (int, float), "reads": (str,), "destination": (str,), "id": (str,)}
+    for key, value in params.items():
+        if not isinstance(value, checks[key]) or (key == "speed" and (isinstance(value, bool) or not 0 <= value < 1)):
+            return [f"`{key}` cannot be {str(value)[:80]}"]
+        if key == "reads" and value not in ("nothing", "wrong"):
+            return ["`reads` is nothing or wrong"]
+        if isinstance(value, str) and len(value) > MAX_NAME:
+            return [f"`{key}` is longer than {MAX_NAME} characters"]
+    return []
+
+
+class _Effect:
+    def __init__(self, book: FaultBook, obj: str, comp: str, value: dict):
+        self.book = book
+        self.owner = book.component(obj, comp)
+        self.slot = book.slots(obj, comp)
+        self.value = value
+        self.kinds = {name: book.signals.slots[i] for name, i in self.slot.items()}
+
+    def begin(self) -> None:
+        """At the point the fault begins (before the point's sources are set)."""
+
+    def apply(self, signals, direction: Direction) -> None:
+        """At every point while it lasts, at both directions' steps."""
+
+    def end(self) -> None:
+        """At the point it ends."""
+
+    def after(self, signals) -> None:
+        """At the SOURCE step of the point it ended at."""
+
+    def sources(self):
+        return [i for name, i in self.slot.items() if self.kinds[name].direction is Direction.SOURCE]
+
+
+class _SensorStuck(_Effect):
+    def begin(self):
+        self.first = True
+
+    def apply(self, signals, direction):
+        if direction is not Direction.SOURCE:
+            return
+        on, slot, active = self.value["value"], self.slot, signals.active
+        for i in self.sources():
+            active[i] = False
+        signals.emit(slot["occupied"], on)
+        if on:
+            active[slot["on_stay"]] = True
+            active[slot["on_enter"]] = self.first
+        self.first = False
+
+    def after(self, signals):
+        slot, seen = self.slot, signals.values[self.slot["occupied"]]
+        if self.value["value"] and not seen:
+            signals.active[slot["on_leave"]] = True
+        elif not self.value["value"] and seen:
+            signals.active[slot["on_enter"]] = True
+
+
+class _BeltFailure(_Effect):
+    def begin(self):
+        index = self.slot["speed"]
+        held = self.owner.held("speed")   # the drive's speed now (a target keeps no value of its own)
+        speed = self.book.signals.values[index] if held is None else held
+        self.book.commands.hold(index, float(speed) * self.value["speed"])
+
+    def end(self):
+        self.book.commands.let_go(self.slot["speed"])
+
+
+class _PartStuck(_Effect):
+    def apply(self, signals, direction):
+        if direction is Direction.TARGET:
+            updated = signals.updated
+            for name, i in self.slot.items():
+                if self.kinds[name].direction is Direction.TARGET:
+                    updated[i] = False
+
+
+class _ReaderFault(_Effect):
+    ENTRY = ("on_enter", "object", "destination", "filled", "capped")
+
+    def apply(self, signals, direction):
+        if direction is not Direction.SOURCE:
+            return
+        slot = self.slot
+        if self.value["reads"] == "nothing":
+            for name in self.ENTRY:
+                if name in slot:
+                    signals.active[slot[name]] = False
+        elif signals.active[slot["on_enter"]]:
+            signals.values[slot["destination"]] = self.value["destination"]
+            if "object" in slot:
+                signals.values[slot["object"]] = self.value["id"]
+
+
+class _LogicDead(_Effect):
+    def begin(self):
+        values = self.book.signals.values
+        self.frozen = [(i, values[i]) for i in self.sources()]
+
+    def apply(self, signals, direction):
+        if direction is not Direction.SOURCE:
+            return
+        values, active = signals.values, signals.active
+        for i, value in self.frozen:
+            values[i] = value
+            active[i] = False
+
+
+_EFFECTS = {"sensor_stuck": _SensorStuck, "belt_failure": _BeltFailure, "part_stuck": _PartStuck,
+            "reader_fault": _ReaderFault, "logic_dead": _LogicDead}
+
+
+class FaultSchedule:
+    """Starts and ends the scenario's faults (hub/scenario/faults.py FaultSpec) at their points: a
+    manipulator (hub/run/master.py) placed just before the Commands it gives them to, which
+    apply and record them at the same point. A replay has none: its recorded commands do it."""
+
+    STATE = ("counts", "pending", "ends")
+
+    def __init__(self, plant, specs, commands):
+        self.commands = commands
+        self.specs = list(specs)
+        self.index = plant.index
+        self.world = plant.world
+        self.pending = list(range(len(self.specs)))   # not started, in the scenario's order
+        self.counts = [0] * len(self.specs)
+        self.ends: dict[int, int] = {}                 # started fault → its end tick
+        self._events = {n: plant.index[s.event] for n, s in enumerate(self.specs) if s.event is not None}
+
+    def take(self, tick: int) -> list:
+        return []
+
+    def apply(self, signals, direction: Direction) -> None:
+        if direction is not Direction.SOURCE:
+            return
+        tick = self.world.tick
+        for n, end in list(self.ends.items()):
+            if end is not None and tick >= end:
+                del self.ends[n]
+                spec = self.specs[n]
+                self.commands.inject(Command("repair", spec.target, {"name": spec.name}, "scenario"))
+        for n in list(self.pending):
+            spec = self.specs[n]
+            if spec.event is not None:
+                if not signals.fired(self._events[n]):
+                    continue
+                self.counts[n] += 1
+                if self.counts[n] < spec.count:
+                    continue
+            elif tick < spec.start:
+                continue
+            self.pending.remove(n)
+            self.ends[n] = tick + spec.duration if spec.duration is not None else spec.end
+            self.commands.inject(Command("fault", spec.target, spec.message(), "scenario"))
+
+
+def fault_slots(scenario) -> set[SlotRef]:
+    """The void sources the scenario's faults count (for Plant: they must be computed)."""
+    return {f.event for f in getattr(scenario, "faults", ()) if f.event is not None}
+

@@ -1,0 +1,142 @@
+"""A scored exercise (`exercise:`): the task, its goals judged on the plant's figures after the run, and the score.
+
+    exercise:
+      task: Route every bottle to its lane although the reader r3 misreads from the 5th bottle on.
+      goals:
+        - {delivered: 40}              # at least 40 bottles delivered
+        - {misrouted: 0, points: 2}    # none misrouted; counts twice
+        - {longest_jam: 5}             # no jam longer than 5 s (0: none at all)
+        - {recover_within: 20}         # after each fault's start, within 20 s a delivery with no jam open
+        - {throughput: 10}             # at least 10 deliveries a minute over the run
+      pass: 100                        # % of the points that passes (default 100: every goal)
+
+Each goal is one of those keys, with an optional `name` and `points` (default 1). The score is
+the points of the goals met over all points, in %; the exercise passes at `pass` % or more.
+`planthub run` prints the goals and the score and writes them to summary.json (`exercise`);
+`planthub test` judges each goal as a test case beside the expectations (JUnit, one case per
+goal, and one for the score). Goals are judged on the plant summary (modules/plant/summary.py:
+deliveries, misrouted bottles, jams) and on the times the faults started (hub/run/faults.py), so
+a plant (sources, sinks) is needed.
+
+Recovery from a fault: the plant has recovered at the first delivery after the fault started at
+which no bottle is jammed; the time from the fault's start to it must be within
+`recover_within`. A fault that never started (its event never came) is not judged.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+GOALS = ("delivered", "misrouted", "longest_jam", "recover_within", "throughput")
+
+
+@dataclass(frozen=True)
+class Goal:
+    """One goal: `key` (one of GOALS) with its `limit`, the points it counts, and a name."""
+
+    key: str
+    limit: float
+    points: int
+    name: str
+    line: int | None = None
+
+    def describe(self) -> str:
+        return {"delivered": f"at least {self.limit:g} bottles delivered",
+                "misrouted": "no bottle misrouted" if self.limit == 0 else f"at most {self.limit:g} misrouted",
+                "longest_jam": "no jam" if self.limit == 0 else f"no jam longer than {self.limit:g} s",
+                "recover_within": f"every fault recovered from within {self.limit:g} s",
+                "throughput": f"at least {self.limit:g} deliveries a minute"}[self.key]
+
+
+@dataclass(frozen=True)
+class Exercise:
+    task: str
+    goals: tuple[Goal, ...]
+    passing: float = 100.0   # % of the points
+    line: int | None = None
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """How one goal came out: met or not, and what was measured."""
+
+    goal: Goal
+    met: bool
+    message: str
+
+
+def check_exercise(checker, spec, plant: bool) -> Exercise | None:
+    """The `exercise:` section's meaning (its shape is the schema's), problems noted on `checker`."""
+    from hub.scenario.yamlsource import line_of
+
+    if not isinstance(spec, dict) or not checker.intact(("exercise",)):
+        return None
+    if not plant:
+        checker.problem(("exercise",), "an exercise's goals are judged on a plant, a scenario with a source or a "
+                                       "sink; this one has neither")
+        return None
+    goals, names = [], set()
+    for i, goal in enumerate(spec["goals"]):
+        at = ("exercise", "goals", i)
+        keys = [k for k in GOALS if k in goal]
+        if len(keys) != 1:
+            checker.problem(at, f"give exactly one goal of {', '.join(GOALS)}"
+                                + (f", not {' and '.join(keys)}" if keys else ""))
+            continue
+        key = keys[0]
+        made = Goal(key, goal[key], goal.get("points", 1), "", line_of(checker.lines, at))
+        name = goal.get("name") or made.describe()
+        if name in names:
+            checker.problem(at, f"two goals are named {name!r}: name them apart")
+            continue
+        names.add(name)
+        goals.append(Goal(key, goal[key], made.points, name, made.line))
+    if len(goals) != len(spec["goals"]):
+        return None
+    return Exercise(spec["task"], tuple(goals), float(spec.get("pass", 100)), line_of(checker.lines, ("exercise",)))
+
+
+def judge(goal: Goal, plant, faults: list[tuple[str, float]]) -> Verdict:
+    """A goal judged on the plant summary (PlantSummary: delivered, misrouted, jams, per_minute,
+    delivery_times, end) and the faults that started, as (name, start s)."""
+    if goal.key == "delivered":
+        return Verdict(goal, plant.delivered >= goal.limit, f"{plant.delivered} delivered")
+    if goal.key == "misrouted":
+        if plant.misrouted is None:
+            return Verdict(goal, False, "not judged: no sink says which destinations its lane is for (`accepts`)")
+        wrong = plant.misrouted
+        named = "; ".join(f"{m.bottle} (for {m.destination}) at {m.sink}" for m in wrong[:5])
+        return Verdict(goal, len(wrong) <= goal.limit, f"{len(wrong)} misrouted" + (f": {named}" if named else ""))
+    if goal.key == "longest_jam":
+        if not plant.jams:
+            return Verdict(goal, True, "no jam")
+        worst = max(plant.jams, key=lambda j: j.seconds(plant.end))
+        seconds = worst.seconds(plant.end)
+        still = " (still jammed at the end)" if worst.until is None else ""
+        return Verdict(goal, seconds <= goal.limit if goal.limit > 0 else False,
+                       f"{len(plant.jams)} jam{'s' * (len(plant.jams) != 1)}, the longest {worst.bottle} on "
+                       f"{worst.belt} from {worst.since:.3f} s for {seconds:.2f} s{still}")
+    if goal.key == "throughput":
+        return Verdict(goal, plant.per_minute >= goal.limit, f"{plant.per_minute:.2f} a minute")
+    # recover_within
+    if not faults:
+        return Verdict(goal, True, "no fault started")
+    found, met = [], True
+    for name, start in faults:
+        back = recovered(start, plant)
+        if back is None:
+            found.append(f"{name}: not recovered by the end ({plant.end - start:.2f} s after its start)")
+            met = False
+        else:
+            found.append(f"{name}: {back - start:.2f} s")
+            met &= back - start <= goal.limit
+    return Verdict(goal, met, "; ".join(found))
+
+
+def recovered(start: float, plant) -> float | None:
+    """The time of the first delivery after `start` at which no bottle is jammed; None: none came."""
+    for t in plant.delivery_times:
+        if t <= start:
+            continue
+        if not any(j.since <= t and (j.until is None or j.until > t) for j in plant.jams):
+            return t
+    return None
