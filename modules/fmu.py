@@ -16,13 +16,13 @@ variable's type, min/max and enumeration items (an Enumeration also by an item's
 Variables named in `events` become void slots: a void target sets the Boolean input true in
 the steps a flow fed it (false otherwise); a Boolean output true makes the void source fire.
 `map` renames variables to slot names. The FMU steps from t to t + h with the inputs it got at
-t; its outputs appear at the next communication point. With `isolate: true` the FMU runs in a
+t; its outputs appear at the next communication point. With `runs: child` the FMU runs in a
 child process: same results, one pipe round trip per step, and a crash of the FMU's code
 stops the run with a message naming it instead of taking the hub down. `step` gives the FMU
 its own, longer communication step (a whole number of the scenario's): it then steps only on
 its own grid, inputs sampled there and outputs held until its next point. With
-`participant: launch` the hub starts `planthub serve-fmu` in a child process that serves the FMU
-over the Zenoh bus in lockstep; with `participant: join` it waits (`join_timeout`) for one
+`runs: bus` the hub starts `planthub serve-fmu` in a child process that serves the FMU
+over the Zenoh bus in lockstep; with `launch: false` beside it, it waits (`join_timeout`) for one
 started elsewhere, e.g. on another machine: `planthub serve-fmu FILE --run RUN --name OBJECT
 --connect tcp/HUB:PORT`. Same results as in-process, bit for bit. On a bus with TLS the launched
 process presents `tls: {certificate, key}`, or else the hub's own certificate, with a warning.
@@ -43,7 +43,8 @@ from hub.bus.lockstep import RemoteSpec
 from hub.bus.tls import LAUNCHED_SCHEMA, launched_problems
 from hub.logic.component import LogicComponent
 from hub.logic.factory import SlavePlan, make_slave
-from hub.core.logic_spec import CO_SIMULATION, INTERFACES, MODEL_EXCHANGE, SOLVERS, own_step_problems
+from hub.core.logic_spec import (CO_SIMULATION, INTERFACES, MODEL_EXCHANGE, REPLACED, RUNS, SOLVERS,
+                                  own_step_problems)
 from hub.logic.fmi import FmuError, inspect_fmu
 from hub.logic.fmi_me import Integration
 from hub.logic.fmi_variables import parameter_problems, parameter_values
@@ -72,11 +73,13 @@ class Fmu(Module):
             "step": {"type": "number", "exclusiveMinimum": 0,
                      "description": "the FMU's own communication step, s: a whole number of the scenario's; "
                                     "default: the scenario's"},
-            "isolate": {"type": "boolean", "default": False,
-                        "description": "run the FMU in a child process: a crash stops the run cleanly"},
-            "participant": {"enum": ["launch", "join"],
-                            "description": "serve the FMU over the bus: launch — the hub starts `planthub serve-fmu`; "
-                                           "join — one started elsewhere joins (default: in the hub)"},
+            "runs": {"enum": list(RUNS), "default": "hub",
+                     "description": "where the FMU runs: hub — in the hub's process; child — in a child process "
+                                    "over a pipe (a crash stops the run cleanly); bus — served over the bus by "
+                                    "`planthub serve-fmu`"},
+            "launch": {"type": "boolean",
+                       "description": "with runs: bus — true (default): the hub starts `planthub serve-fmu`; "
+                                      "false: one started elsewhere joins"},
             "step_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
                              "description": "s one step may take: past it an isolated FMU's worker is killed and an "
                                             "FMU in the hub ends the hub (a C call cannot be interrupted); either way "
@@ -93,12 +96,13 @@ class Fmu(Module):
                          "description": "model exchange: the solver's longest internal step, s (cvode: unlimited)"},
             "tolerance": {"type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 1,
                           "description": "model exchange, cvode: the relative tolerance (default 1e-6)"},
-            "tls": {**LAUNCHED_SCHEMA, "description": "with participant: launch, the certificate `planthub "
+            "tls": {**LAUNCHED_SCHEMA, "description": "with runs: bus, the certificate `planthub "
                                                       "serve-fmu` presents on the bus (without: the hub's own, "
                                                       "with a warning)"},
         },
         "required": ["file"],
         "additionalProperties": False,
+        "x-replaced": {key: REPLACED[key] for key in ("isolate", "participant")},
     }
     COMPONENTS = {"logic": LogicComponent}
 
@@ -109,12 +113,13 @@ class Fmu(Module):
         except FmuError as exc:
             return [(("file",), str(exc))]
         problems = []
-        if params["isolate"] and "participant" in params:
-            problems.append((("isolate",), "isolate and participant exclude each other: a child process over a "
-                                           "pipe, or a participant over the bus"))
-        if "tls" in params and params.get("participant") != "launch":
-            problems.append((("tls",), "a certificate goes with participant: launch, a process the hub starts on "
-                                       "the bus; one that joins presents its own (serve-fmu --tls-cert, --tls-key)"))
+        if "launch" in params and params["runs"] != "bus":
+            problems.append((("launch",), f"launch goes with runs: bus (a process serving the FMU over the bus); "
+                                          f"with runs: {params['runs']} the hub launches nothing"))
+        elif "tls" in params and not cls.launched(params):
+            problems.append((("tls",), "a certificate goes with runs: bus, a process the hub starts on the bus; "
+                                       "one that joins (launch: false) presents its own (serve-fmu --tls-cert, "
+                                       "--tls-key)"))
         kind = params.get("interface", fmu.kind)
         if kind not in fmu.interfaces:
             problems.append((("interface",), f"{fmu.path.name} offers no {kind} interface with a binary for this "
@@ -125,10 +130,10 @@ class Fmu(Module):
                          for key in ("solver", "max_step", "tolerance") if key in params]
         elif params.get("solver") == "euler" and "max_step" not in params:
             problems.append((("solver",), "euler takes fixed steps: give their length as max_step"))
-        if params.get("participant") == "join":
+        if params["runs"] == "bus" and not cls.launched(params):
             # A joining serve-fmu integrates with its own command line's settings; the hub cannot set them.
             problems += [((key,), f"{key} is given to the joining process (`planthub serve-fmu --"
-                                  f"{key.replace('_', '-')} …`): with participant: join the hub cannot set it")
+                                  f"{key.replace('_', '-')} …`): with launch: false the hub cannot set it")
                          for key in ("interface", "solver", "max_step", "tolerance") if key in params]
         variables = fmu.variables
         ports = {v.name for v in fmu.of("input") + fmu.of("output")}
@@ -179,6 +184,11 @@ class Fmu(Module):
         return {"logic": tuple(s for s, _ in fmu_ports(inspect_fmu(params["file"]), params.get("events", ()), params.get("map", {})))}
 
     @classmethod
+    def launched(cls, params) -> bool:
+        """Whether the hub starts the process that serves this FMU over the bus."""
+        return params["runs"] == "bus" and params.get("launch", True)
+
+    @classmethod
     def serve_command(cls, params) -> list[str]:
         """The command that serves this FMU over the bus (the object's name and the bus come from
         the environment the hub sets; by hand, add --run, --name and --connect)."""
@@ -213,14 +223,13 @@ class Fmu(Module):
         # its slot starts there, and the hub writes it back unchanged until a flow changes it.
         starts = {s.name: parameters.get(v, fmu.variables[v].start) for s, v in inputs
                   if s.type is not SlotType.VOID and parameters.get(v, fmu.variables[v].start) is not None}
-        launch = params.get("participant") == "launch"
+        launch = cls.launched(params)
         own = (params["tls"]["certificate"], params["tls"]["key"]) if "tls" in params else None
         spec = RemoteSpec(name, tuple((s.name, s.type) for s, _ in inputs), tuple((s.name, s.type) for s, _ in outputs),
                           parameters, tuple(cls.serve_command(params)) if launch else None,
                           None, float(params["join_timeout"]), f"FMU {fmu.path.name}", tls=own)
-        transport = "bus" if "participant" in params else "child" if params["isolate"] else "hub"
-        slave = make_slave(SlavePlan(transport, spec, fmu=fmu, variables=(tuple(v for _, v in inputs),
-                                                                           tuple(v for _, v in outputs)),
+        variables = (tuple(v for _, v in inputs), tuple(v for _, v in outputs))
+        slave = make_slave(SlavePlan(params["runs"], spec, fmu=fmu, variables=variables,
                                      step_timeout=float(params["step_timeout"]), integration=cls.integration(params)),
                            world.rate)
         as_pairs = lambda pairs: [(s.name, s.type is SlotType.VOID) for s, _ in pairs]

@@ -11,9 +11,10 @@ it (in `cwd`, default the scenario's folder; `python` is the hub's own interpret
 at the end; without, it waits `join_timeout` s for one started elsewhere (`--run`, `--name`,
 `--connect`). A Python participant can be named by its module instead: `python: [MODULE, ARGS…]`
 launches `python -m MODULE ARGS…`. On a bus with TLS a launched process presents `tls: {certificate,
-key}` (paths relative to the scenario file), or else the hub's own certificate, with a warning. With `in_process: true` the hub makes the same logic with
-MODULE's `participant(ARGS)` and steps it in its own process, without the bus (hub/logic/inprocess.py):
-the same results, bit for bit, without the round trip. Like an FMU it steps from t to t + h with
+key}` (paths relative to the scenario file), or else the hub's own certificate, with a warning.
+With `runs: hub` the hub makes the same logic with MODULE's `participant(ARGS)` and steps it in
+its own process, without the bus (hub/logic/inprocess.py): the same results, bit for bit,
+without the round trip. Like an FMU it steps from t to t + h with
 the inputs of t, and its outputs appear at t + h; `step` gives it its own, longer step. A void
 input is true in the steps a flow fed it; a void output true fires the event.
 """
@@ -23,7 +24,7 @@ from hub.bus.lockstep import RemoteSpec
 from hub.bus.tls import LAUNCHED_SCHEMA, launched_problems
 from hub.logic.component import LogicComponent
 from hub.logic.factory import SlavePlan, make_slave
-from hub.core.logic_spec import own_step_problems
+from hub.core.logic_spec import REPLACED, RUNS, own_step_problems
 from hub.core.module import Module
 from hub.core.slots import Slot, SlotType
 
@@ -46,8 +47,9 @@ class ParticipantModule(Module):
                         "description": "the hub starts this command (in cwd); without: it joins by itself"},
             "python": {"type": "array", "items": {"type": "string"}, "minItems": 1,
                        "description": "instead of `command`: a Python participant module and its arguments"},
-            "in_process": {"type": "boolean", "default": False,
-                           "description": "with `python`: run the logic inside the hub, not as a process on the bus"},
+            "runs": {"enum": list(RUNS), "default": "bus",
+                     "description": "where the logic runs: bus — a participant process on the bus; hub — with "
+                                    "`python`, the same logic inside the hub, without the bus"},
             "cwd": {"type": "string", "x-path": True, "default": ".",
                     "description": "folder the command runs in, relative to the scenario file"},
             "tls": LAUNCHED_SCHEMA,
@@ -59,6 +61,7 @@ class ParticipantModule(Module):
                      "description": "its own communication step, s: a whole number of the scenario's"},
         },
         "additionalProperties": False,
+        "x-replaced": {"in_process": REPLACED["in_process"]},
     }
     COMPONENTS = {"logic": LogicComponent}
 
@@ -68,10 +71,13 @@ class ParticipantModule(Module):
         problems = [(("outputs", name), f"{name!r} is also an input: slot names must differ") for name in both]
         if "python" in params and "command" in params:
             problems.append((("python",), "give `command` (any program) or `python` (a Python module), not both"))
-        if params["in_process"] and "python" not in params:
-            problems.append((("in_process",), "only a Python participant (`python: [MODULE, ...]`) runs in-process"))
-        if "tls" in params and params["in_process"]:
-            problems.append((("tls",), "an in-process participant is not on the bus: it needs no certificate"))
+        if params["runs"] == "child":
+            problems.append((("runs",), "a participant runs on the bus, or with `python` in the hub (runs: hub); "
+                                        "a child process over a pipe is for an FMU"))
+        if params["runs"] == "hub" and "python" not in params:
+            problems.append((("runs",), "only a Python participant (`python: [MODULE, ...]`) runs in the hub"))
+        if "tls" in params and params["runs"] == "hub":
+            problems.append((("tls",), "a participant in the hub is not on the bus: it needs no certificate"))
         elif "tls" in params and "command" not in params and "python" not in params:
             problems.append((("tls",), "the hub launches no process here (no `command` or `python`): a participant "
                                        "that joins by itself presents its own certificate (--tls-cert, --tls-key)"))
@@ -99,7 +105,7 @@ class ParticipantModule(Module):
         own = (params["tls"]["certificate"], params["tls"]["key"]) if "tls" in params else None
         spec = RemoteSpec(name, inputs, outputs, dict(params["parameters"]), command, params["cwd"],
                           float(params["join_timeout"]), tls=own)
-        plan = SlavePlan("hub", spec, python=tuple(params["python"])) if params["in_process"] else SlavePlan("bus", spec)
+        plan = SlavePlan(params["runs"], spec, python=tuple(params["python"]) if "python" in params else None)
         slave = make_slave(plan, world.rate)
         as_pairs = lambda pairs: [(n, k is SlotType.VOID) for n, k in pairs]
         every = round(params["step"] * world.rate) if "step" in params else None

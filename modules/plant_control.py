@@ -11,7 +11,7 @@ their number is the number of reader/switch pairs, and the interface follows fro
 
 A scenario runs it as its own process on the bus (`python: [modules.plant_control, --lanes, …]`,
 launched by the hub; or joined from anywhere with `python -m modules.plant_control --lanes …
---run RUN --name NAME --connect …`), or in the hub's process with `in_process: true`.
+--run RUN --name NAME --connect …`), or in the hub's process with `runs: hub`.
 """
 import argparse
 
@@ -49,7 +49,7 @@ def _lanes(text: str) -> list[str]:
 
 
 def participant(argv: list[str]) -> PlantControl:
-    """The logic from its arguments (`--lanes A,B,C`): what `in_process: true` runs."""
+    """The logic from its arguments (`--lanes A,B,C`): what `runs: hub` runs."""
     return PlantControl(_arguments(argparse.ArgumentParser(prog="modules.plant_control")).parse_args(argv).lanes)
 
 

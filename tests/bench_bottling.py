@@ -64,7 +64,7 @@ def window(in_process: bool, sleep_after: float | None, more: dict | None = None
     start–end, mean asleep). Bare: pybullet alone steps the same bodies as many ticks from
     where the hub left them, every one awake (as in a world without rest). `more`: further
     overrides (free transport)."""
-    overrides = {"objects.control.in_process": in_process, **(more or {})}
+    overrides = {"objects.control.runs": "hub" if in_process else "bus", **(more or {})}
     if sleep_after is not None:
         overrides["run.sleep_after"] = sleep_after
     scenario = load_scenario(PLANT, overrides)
@@ -95,7 +95,7 @@ def window(in_process: bool, sleep_after: float | None, more: dict | None = None
 
 def deliveries(sleep_after: float | None, more: dict | None = None) -> tuple[dict[str, tuple[str, float]], float]:
     """{bottle: (sink, time)} over the first COMPARED seconds, and the wall time."""
-    overrides = {"objects.control.in_process": True, "run.duration": COMPARED, **(more or {})}
+    overrides = {"objects.control.runs": "hub", "run.duration": COMPARED, **(more or {})}
     if sleep_after is not None:
         overrides["run.sleep_after"] = sleep_after
     scenario = load_scenario(PLANT, overrides)

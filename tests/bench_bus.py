@@ -275,7 +275,7 @@ class Watchers:
 
 def watched_plant() -> None:
     print(f"\n## The bottling plant watched: {', '.join(map(str, WATCHERS))} watcher processes on `plant/<run>/**`\n")
-    print(f"scenarios/bottling_plant.yaml with the routing in the hub (`objects.control.in_process: true`), "
+    print(f"scenarios/bottling_plant.yaml with the routing in the hub (`objects.control.runs: hub`), "
           f"from {PLANT_FROM:g} s on, {PLANT_ROUNDS} rounds of turns of {PLANT_TURN:g} s of plant time with "
           f"{', '.join(map(str, WATCHERS))} watchers, in one run. A watcher is a hub.live.Viewer in a process of "
           "its own on loopback, all of them in a session apart from the hub's; after they subscribe, the plant "
@@ -289,7 +289,7 @@ def watched_plant() -> None:
           "take in what they were sent.\n")
     warm_most = 30.0   # plant s the warm-up may take at most
     rounds_end = PLANT_FROM + PLANT_ROUNDS * (len(WATCHERS) * PLANT_TURN + (len(WATCHERS) - 1) * warm_most) + PLANT_TURN
-    scenario = load_scenario(PLANT, {"objects.control.in_process": True, "run.duration": rounds_end})
+    scenario = load_scenario(PLANT, {"objects.control.runs": "hub", "run.duration": rounds_end})
     rate, substeps = scenario.run.physics_rate, scenario.run.substeps
     bus = Bus(BusSettings())
     turns = {n: [] for n in WATCHERS}

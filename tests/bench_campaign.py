@@ -5,7 +5,7 @@ overhead per case is what a case costs beyond its run: the campaign's worker-tim
 at once) less the time the cases' child processes took, per case (scheduling, handing the case
 over, the result back, a worker between cases); and the child's own start (a fresh Python that
 imports the hub: the child's wall less the same run's in one process). The routing logic runs
-in the hub (`objects.control.in_process: true`, the same results) so that no case starts a
+in the hub (`objects.control.runs: hub`, the same results) so that no case starts a
 participant process of its own beside its run. Run alone: `python -m tests.bench_campaign`.
 """
 from __future__ import annotations
@@ -33,7 +33,7 @@ name: bottling_plant_seeds
 scenarios: [{ROOT / 'scenarios' / 'bottling_plant.yaml'}]
 matrix:
   run.duration: [{SECONDS}]
-  objects.control.in_process: [true]
+  objects.control.runs: [hub]
 seeds: {CASES}
 time_limit: 600
 """

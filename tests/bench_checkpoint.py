@@ -22,7 +22,7 @@ from .helpers import ROOT
 SCENARIO = ROOT / "scenarios" / "bottling_plant.yaml"
 AT = 45.0          # s: the line is full (make run: the busiest window is 40–60 s)
 REPEATS = 7
-SETS = {"objects.control.in_process": True}
+SETS = {"objects.control.runs": "hub"}
 
 
 def _started(data: bytes | None) -> float:

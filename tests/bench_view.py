@@ -258,7 +258,7 @@ def viewed_plant() -> None:
     if not BUNDLE.is_file():
         raise SystemExit(f"no {BUNDLE}: build the front-end with `make view-assets`")
     print(f"\n## The bottling plant viewed: {', '.join(VIEWERS)}\n")
-    print(f"scenarios/bottling_plant.yaml with the routing in the hub (`objects.control.in_process: true`) in this "
+    print(f"scenarios/bottling_plant.yaml with the routing in the hub (`objects.control.runs: hub`) in this "
           f"process, on the bus as `planthub run --listen` puts it, from {VIEW_FROM:g} s on: {VIEW_ROUNDS} rounds "
           f"of turns of {VIEW_TURN:g} s of plant time with no viewer, with `planthub view` connected (its bodies, "
           f"events, figures and belt speeds relayed to nobody) and with a {PAGE['width']}×{PAGE['height']} page of "
@@ -274,7 +274,7 @@ def viewed_plant() -> None:
           f"second of wall time over the turn and over {HELD:g} s after it with the plant held (the machine to "
           "itself), and the bottles it drew at the turn's end (of the 150 in the scene).\n")
     turns_end = VIEW_FROM + VIEW_ROUNDS * (len(VIEWERS) * VIEW_TURN + 2 * VIEW_WARM + 10.0) + VIEW_TURN + 10.0
-    scenario = load_scenario(PLANT, {"objects.control.in_process": True, "run.duration": turns_end})
+    scenario = load_scenario(PLANT, {"objects.control.runs": "hub", "run.duration": turns_end})
     rate = scenario.run.physics_rate
     turns = {kind: [] for kind in VIEWERS}
     costs = []

@@ -42,7 +42,7 @@ record: [counter.logic.level, counter.logic.steps]
 
 @pytest.mark.parametrize("isolate", [False, True])
 def test_a_nan_from_an_fmu_stops_the_run_naming_slot_and_time(faulty, tmp_path, isolate):
-    path = nan_fmu_scene(tmp_path, faulty / "faulty-fmi2.fmu", ", isolate: true" if isolate else "")
+    path = nan_fmu_scene(tmp_path, faulty / "faulty-fmi2.fmu", ", runs: child" if isolate else "")
     proc = planthub("run", path, "--out", tmp_path / "out")
     assert proc.returncode == 1, proc.stdout + proc.stderr
     assert ("counter.logic.level: the logic 'counter' gave nan at t = 0.4 s (tick 40); every value entering "
@@ -64,7 +64,7 @@ def test_hold_keeps_the_last_good_value_and_says_so(faulty, tmp_path):
 
 
 @pytest.mark.parametrize("how", ["python: [tests.participants.belt_drives, nan]",
-                                 "python: [tests.participants.belt_drives, nan]\n    in_process: true"])
+                                 "python: [tests.participants.belt_drives, nan]\n    runs: hub"])
 def test_a_nan_from_a_participant_never_reaches_the_belt(tmp_path, how):
     path = tmp_path / "scene.yaml"
     path.write_text(PARTICIPANT.read_text().replace(LAUNCHED, f"{how}\n    cwd: {ROOT}"))

@@ -20,7 +20,7 @@ from .plant_watch import run_watched
 
 SCENARIO = ROOT / "scenarios" / "bottling_plant.yaml"
 LANES = {f"sink_{lane}": lane for lane in "ABCDEF"}
-IN_PROCESS = {"objects.control.in_process": True}
+IN_PROCESS = {"objects.control.runs": "hub"}
 DURATION = 56.0     # s: the first delivery is at 34.7 s; by 56 s every lane has had a bottle
 # The filler's share of bad fills for the watched run: the plant's 4 % leaves its first bottle
 # unfilled only at the 36th; at 30 % the seed makes M002, M004, M013 and M015 bad, within 56 s.
@@ -77,7 +77,7 @@ def test_good_bottles_reach_their_destinations_and_the_bad_the_reject_lane_sound
 
 
 def test_the_run_summary_counts_what_the_event_log_shows_and_finds_no_jam(tmp_path):
-    stdout, summary = planthub_run(SCENARIO, tmp_path, "run.duration=45", "objects.control.in_process=true")
+    stdout, summary = planthub_run(SCENARIO, tmp_path, "run.duration=45", "objects.control.runs=hub")
     plant = summary["plant"]
     taken, _ = deliveries(load_scenario(SCENARIO), tmp_path)
     released = [e for e in rows(tmp_path / "events.csv") if e["slot"].endswith(".store.released")]

@@ -261,11 +261,11 @@ def test_a_launched_participant_without_a_certificate_of_its_own_gets_the_hubs_w
 
 
 def test_an_fmu_served_by_a_launched_process_presents_its_own_certificate(certs, tmp_path):
-    """`planthub serve-fmu`, launched for `participant: launch`, joins as `plc` under access control."""
+    """`planthub serve-fmu`, launched for `runs: bus`, joins as `plc` under access control."""
     notes = []
     run_scenario(BELT_FMU, tmp_path / "out", {
         "run.bus": {"listen": [tls_endpoint()], "tls": tls_section(certs), "access": {"control": ["plc"]}},
-        "objects.drive.participant": "launch",
+        "objects.drive.runs": "bus",
         "objects.drive.tls": {"certificate": str(certs / "plc.pem"), "key": str(certs / "plc.key")}},
         log=notes.append)
     over_the_hub = tmp_path / "in_hub"
@@ -446,10 +446,11 @@ def test_a_certificate_for_a_process_the_hub_does_not_launch_is_named(write_scen
         outputs: {{speed: real}}
         command: [python, -m, modules.belt_drive_logic]""", f"""        module: fmu
         file: {ROOT}/build/fmus/belt_drive-fmi2.fmu
-        participant: join""")
+        runs: bus
+        launch: false""")
     assert own_certificate_problems(write_scenario, certs, own, fmu) == [
-        "scene.yaml:12: objects.drive.tls: a certificate goes with participant: launch, a process the hub starts on "
-        "the bus; one that joins presents its own (serve-fmu --tls-cert, --tls-key)"]
+        "scene.yaml:13: objects.drive.tls: a certificate goes with runs: bus, a process the hub starts on the bus; "
+        "one that joins (launch: false) presents its own (serve-fmu --tls-cert, --tls-key)"]
 
 
 def test_the_scene_says_who_may_command_and_a_watch_only_view_is_told_why(certs):

@@ -269,7 +269,7 @@ def test_check_fmu_warns_of_what_fmpy_validation_finds_in_a_third_party_fmu(fmus
 
 def test_an_isolated_fmu_gives_the_same_recording(fmus, tmp_path):
     run_scenario(SCENARIO, tmp_path / "in")
-    run_scenario(SCENARIO, tmp_path / "out", {"objects.drive.isolate": True})
+    run_scenario(SCENARIO, tmp_path / "out", {"objects.drive.runs": "child"})
     assert (tmp_path / "in" / "recording.csv").read_bytes() == (tmp_path / "out" / "recording.csv").read_bytes()
 
 
@@ -278,7 +278,7 @@ def counter_scene(write_scenario, fmu, isolate, extra="", objects="", flows=""):
         planthub: 1
         run: {{duration: 1.0, physics_rate: 100, communication_step: 0.1}}
         objects:
-          counter: {{module: fmu, file: {fmu}, isolate: {str(isolate).lower()}{extra}}}
+          counter: {{module: fmu, file: {fmu}, runs: {'child' if isolate else 'hub'}{extra}}}
           {objects}
         flows: [{flows}]
         record: [counter.logic.steps]

@@ -115,7 +115,7 @@ def test_an_array_element_can_be_set_alone(foreign, write_scenario, tmp_path):
     assert (last["t.logic.v_0"], last["t.logic.v_1"]) == ("4.0", "9.0")   # (1 0; 0 3) · (1, 2) + 3
 
 
-@pytest.mark.parametrize("isolate", ["isolate: true", "participant: launch"])
+@pytest.mark.parametrize("isolate", ["runs: child", "runs: bus"])
 def test_typed_values_cross_a_pipe_and_the_bus_bit_for_bit(foreign, write_scenario, tmp_path, isolate):
     run_scenario(typed_scene(write_scenario, foreign), tmp_path / "hub")
     run_scenario(typed_scene(write_scenario, foreign, ", " + isolate), tmp_path / "other")

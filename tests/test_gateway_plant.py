@@ -14,7 +14,7 @@ DURATION = 56.0   # s: by then every lane has had a bottle (tests/test_bottling_
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
     out = tmp_path_factory.mktemp("participant")
-    run_scenario(SCENARIO, out, {"run.duration": DURATION, "objects.control.in_process": True})
+    run_scenario(SCENARIO, out, {"run.duration": DURATION, "objects.control.runs": "hub"})
     return out
 
 

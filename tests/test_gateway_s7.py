@@ -145,7 +145,7 @@ def test_a_second_s7_gateway_on_a_taken_port_is_refused_naming_the_endpoint(tmp_
 
 def test_an_s7_plc_routes_the_bottling_plant_bit_for_bit_as_the_participant(tmp_path):
     reference = tmp_path / "participant"
-    run_scenario(BOTTLING, reference, {"run.duration": DURATION, "objects.control.in_process": True})
+    run_scenario(BOTTLING, reference, {"run.duration": DURATION, "objects.control.runs": "hub"})
     (tmp_path / "s7").mkdir()
     out, said, summary = bottling_via_gateway(tmp_path / "s7", "s7", DURATION)
     scans, decisions = int(said.split()[1]), int(said.split()[3])

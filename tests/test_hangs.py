@@ -42,7 +42,7 @@ def rows(path):
 
 @pytest.mark.parametrize("isolate", [True, False])
 def test_a_hanging_fmu_stops_the_run_naming_it_with_its_files_complete(faulty, tmp_path, isolate):
-    path = scene(tmp_path, faulty / "faulty-fmi2.fmu", ", isolate: true" if isolate else "")
+    path = scene(tmp_path, faulty / "faulty-fmi2.fmu", ", runs: child" if isolate else "")
     out = tmp_path / "out"
     started = time.monotonic()
     proc = subprocess.run([sys.executable, "-m", "hub", "run", str(path), "--out", str(out)],
@@ -153,7 +153,7 @@ def test_the_temporary_files_of_a_hub_killed_by_sigkill_are_swept_by_the_next_ru
     scene_path.write_text((ROOT / "scenarios" / "belt_ramp_participant.yaml").read_text()
                           .replace("duration: 6.0", "duration: 600.0")
                           .replace("  go:", f"  spare: {{module: fmu, file: '{ROOT}/build/fmus/belt_drive-fmi2.fmu', "
-                                            f"isolate: true}}\n  go:"))
+                                            f"runs: child}}\n  go:"))
     hub = subprocess.Popen([sys.executable, "-m", "hub", "run", str(scene_path), "--out", str(tmp_path / "out"),
                             "--realtime", "1"], cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     try:

@@ -1,4 +1,4 @@
-"""A Python participant in the hub's process (`python: [...]`, `in_process: true`): the same run,
+"""A Python participant in the hub's process (`python: [...]`, `runs: hub`): the same run,
 bit for bit, as the same logic launched as a process on the bus; its faults named as over the bus."""
 import pytest
 
@@ -21,7 +21,7 @@ def variant(tmp_path, how: str, name: str):
 def test_in_process_gives_the_recording_of_the_launched_participant(tmp_path):
     # tests.participants.belt_drives `plain` is modules.belt_drive_logic's BeltDrive, with participant(argv)
     python = f"python: [tests.participants.belt_drives, plain]\n    cwd: {ROOT}"
-    runs = {"command": LAUNCHED, "python": python, "in_process": python + "\n    in_process: true"}
+    runs = {"command": LAUNCHED, "python": python, "in_process": python + "\n    runs: hub"}
     recordings = {}
     for name, how in runs.items():
         out = tmp_path / name
@@ -43,7 +43,7 @@ def scene(write_scenario, participant: str, extra: str = ""):
             outputs: {{speed: real, running: bool}}
             parameters: {{fail_at: 0.5}}
             python: {participant}
-            in_process: true
+            runs: hub
             cwd: {ROOT}
 {extra}
         """)
@@ -89,7 +89,7 @@ def test_logic_that_does_not_fit_the_scenario_is_named(write_scenario):
             inputs: {{r1_read: void, r1_destination: int}}
             outputs: {{sw1_work: void}}
             python: [modules.plant_control, --lanes, A]
-            in_process: true
+            runs: hub
         """)
     with pytest.raises(SimulationError) as info:
         run_scenario(path)
@@ -115,7 +115,7 @@ def test_python_and_command_together_are_refused(write_scenario):
         in str(info.value)
 
 
-def test_in_process_without_a_python_module_is_refused(write_scenario):
+def test_runs_hub_without_a_python_module_is_refused(write_scenario):
     path = write_scenario("""
         planthub: 1
         run: {duration: 1.0, physics_rate: 100}
@@ -123,12 +123,29 @@ def test_in_process_without_a_python_module_is_refused(write_scenario):
           drive:
             module: participant
             inputs: {run: bool}
-            in_process: true
+            runs: hub
         """)
     with pytest.raises(PlanthubError) as info:
         run_scenario(path)
-    assert "objects.drive.in_process: only a Python participant (`python: [MODULE, ...]`) runs in-process" \
+    assert "objects.drive.runs: only a Python participant (`python: [MODULE, ...]`) runs in the hub" \
         in str(info.value)
+
+
+def test_in_process_is_gone_and_says_what_to_write(write_scenario):
+    path = write_scenario("""
+        planthub: 1
+        objects:
+          a: {module: participant, python: [modules.belt_drive_logic], in_process: true}
+          b: {module: participant, python: [modules.belt_drive_logic], in_process: false}
+          c: {module: participant, python: [modules.belt_drive_logic], runs: child}
+        """)
+    with pytest.raises(PlanthubError) as info:
+        run_scenario(path)
+    assert [str(p) for p in info.value.problems] == [
+        f"{path}:3: objects.a.in_process: in_process is gone: write `runs: hub` instead",
+        f"{path}:4: objects.b.in_process: in_process is gone: write `runs: bus` instead",
+        f"{path}:5: objects.c.runs: a participant runs on the bus, or with `python` in the hub (runs: hub); "
+        f"a child process over a pipe is for an FMU"]
 
 
 def test_arguments_the_module_rejects_are_named(write_scenario):
@@ -141,7 +158,7 @@ def test_arguments_the_module_rejects_are_named(write_scenario):
             inputs: {r1_read: void, r1_destination: string}
             outputs: {sw1_work: void, sw1_base: void}
             python: [modules.plant_control]
-            in_process: true
+            runs: hub
         """)
     with pytest.raises(SimulationError) as info:
         run_scenario(path)

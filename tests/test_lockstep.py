@@ -32,7 +32,7 @@ def test_an_fmu_served_over_the_bus_gives_the_in_process_recording(in_process, t
     """
         drive.logic ══ bus ══ planthub serve-fmu belt_drive-fmi2.fmu   (a process the hub launches)
     """
-    run_scenario(BELT_FMU, tmp_path, {"objects.drive.participant": "launch"})
+    run_scenario(BELT_FMU, tmp_path, {"objects.drive.runs": "bus"})
     assert same_files(in_process, tmp_path)
 
 
@@ -48,7 +48,7 @@ def test_a_python_participant_gives_the_in_process_recording(in_process, tmp_pat
 
 def test_an_fmu_joining_from_another_process_gives_the_same_recording(in_process, tmp_path):
     """The hub waits for `planthub serve-fmu … --connect ENDPOINT`, started by someone else."""
-    with Bus(BusSettings()) as bus, hub(BELT_FMU, tmp_path, {"objects.drive.participant": "join"}, bus=bus) as master:
+    with Bus(BusSettings()) as bus, hub(BELT_FMU, tmp_path, {"objects.drive.runs": "bus", "objects.drive.launch": False}, bus=bus) as master:
         with process("-m", "hub", "serve-fmu", FMU, "--run", "belt_ramp_fmu", "--name", "drive",
                      "--connect", bus.endpoints[0]) as proc:
             master.run()
@@ -258,27 +258,37 @@ def test_a_served_fmu_announces_the_fmu_module_slots_with_events_and_renames(fmu
     from modules.fmu import Fmu
 
     params = Fmu.with_defaults({"file": str(FMU), "events": ["run"], "map": {"speed": "belt_speed"},
-                                "participant": "launch"})
+                                "runs": "bus"})
     inputs, outputs = FmuParticipant(str(FMU), ["run"], {"speed": "belt_speed"}).interface()
     assert [(s.name, s.type) for s in Fmu.slots(params)["logic"]] == inputs + outputs
     assert ("run", SlotType.VOID) in inputs and ("belt_speed", SlotType.REAL) in outputs
     assert Fmu.serve_command(params)[3:] == ["serve-fmu", str(FMU), "--event", "run", "--map", "speed=belt_speed"]
 
 
-def test_isolate_and_participant_exclude_each_other(fmus, write_scenario):
+def test_the_keys_runs_replaced_name_the_value_to_write(fmus, write_scenario):
     from hub.core.errors import ScenarioError
     from hub.scenario.checker import load_scenario
 
     path = write_scenario(f"""
         planthub: 1
         objects:
-          drive: {{module: fmu, file: {FMU}, isolate: true, participant: launch}}
+          a: {{module: fmu, file: {FMU}, isolate: true}}
+          b: {{module: fmu, file: {FMU}, isolate: false}}
+          c: {{module: fmu, file: {FMU}, participant: launch}}
+          d: {{module: fmu, file: {FMU}, participant: join}}
+          e: {{module: fmu, file: {FMU}, runs: child, launch: false}}
+          f: {{module: conveyor, position: [0, 0, 0], length: 1, logic: {{isolate: true}}}}
         """)
     with pytest.raises(ScenarioError) as info:
         load_scenario(path)
     assert [str(p) for p in info.value.problems] == [
-        f"{path}:3: objects.drive.isolate: isolate and participant exclude each other: a child process over "
-        f"a pipe, or a participant over the bus"]
+        f"{path}:3: objects.a.isolate: isolate is gone: write `runs: child` instead",
+        f"{path}:4: objects.b.isolate: isolate is gone: write `runs: hub` instead",
+        f"{path}:5: objects.c.participant: participant is gone: write `runs: bus` instead",
+        f"{path}:6: objects.d.participant: participant is gone: write `runs: bus` with `launch: false` instead",
+        f"{path}:7: objects.e.launch: launch goes with runs: bus (a process serving the FMU over the bus); "
+        f"with runs: child the hub launches nothing",
+        f"{path}:8: objects.f.logic.isolate: isolate is gone: write `runs: child` instead"]
 
 
 @pytest.mark.parametrize("settings", [{"objects.drive.step": 0.1}, {"run.event_driven": True}],

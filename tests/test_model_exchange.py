@@ -106,7 +106,7 @@ def test_explicit_euler_is_the_fixed_step_choice_with_its_own_error(foreign, wri
     assert hit == pytest.approx(math.ceil(first / 0.01) * 0.01)
 
 
-@pytest.mark.parametrize("where", [", isolate: true", ", participant: launch"])
+@pytest.mark.parametrize("where", [", runs: child", ", runs: bus"])
 def test_a_model_exchange_fmu_gives_the_same_results_in_every_transport(foreign, write_scenario, tmp_path, where):
     """In a child process and served over the bus, the same recording as in the hub, byte for byte."""
     run_scenario(ball_scene(write_scenario, foreign["ball2"]), tmp_path / "hub")
@@ -160,7 +160,7 @@ def test_interface_and_solver_settings_are_checked(foreign, write_scenario):
           b: {{module: fmu, file: {enum2}, solver: cvode, tolerance: 0.001}}
           c: {{module: fmu, file: {ball2}, solver: euler}}
           d: {{module: fmu, file: {ball2}, interface: co-simulation}}
-          e: {{module: fmu, file: {ball2}, participant: join, solver: euler, max_step: 0.001}}
+          e: {{module: fmu, file: {ball2}, runs: bus, launch: false, solver: euler, max_step: 0.001}}
         """)
     assert errors(path) == [
         "objects.a.interface: enum2.fmu offers no model-exchange interface with a binary for this platform "
@@ -173,7 +173,7 @@ def test_interface_and_solver_settings_are_checked(foreign, write_scenario):
         "objects.d.interface: ball2.fmu offers no co-simulation interface with a binary for this platform "
         "(it offers: model-exchange)",
         "objects.e.solver: solver is given to the joining process (`planthub serve-fmu --solver …`): with "
-        "participant: join the hub cannot set it",
+        "launch: false the hub cannot set it",
         "objects.e.max_step: max_step is given to the joining process (`planthub serve-fmu --max-step …`): with "
-        "participant: join the hub cannot set it",
+        "launch: false the hub cannot set it",
     ]

@@ -52,7 +52,7 @@ def in_process(tmp_path_factory):
     """The same run with the drive's logic in the hub (tests.participants.belt_drives `plain` is
     modules.belt_drive_logic's BeltDrive): the reference recording."""
     folder = tmp_path_factory.mktemp("sealed")
-    how = f"    python: [tests.participants.belt_drives, plain]\n    cwd: {ROOT}\n    in_process: true\n"
+    how = f"    python: [tests.participants.belt_drives, plain]\n    cwd: {ROOT}\n    runs: hub\n"
     run_scenario(variant(folder, how, "in_process"), folder / "out", OVERRIDES)
     return (folder / "out" / "recording.csv").read_bytes()
 

@@ -22,7 +22,7 @@ def add_commands(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str 
         "serve-fmu", parents=parents, formatter_class=formatter,
         help="serve an FMU to a running plant over the bus (a lockstep participant)",
         description="Serve an FMU to a running plant over the bus: a lockstep participant for an `fmu` object "
-                    "with `participant: join` (or one the hub launches).",
+                    "with `runs: bus` and `launch: false` (or one the hub launches).",
         epilog="example:\n  planthub serve-fmu build/fmus/belt_drive-fmi2.fmu --run belt_ramp_fmu --name drive "
                "\\\n      --connect tcp/192.168.1.5:7447 --event run --map speed=belt_speed\n\n" + epilog)
     serve.add_argument("fmu", type=Path, help="the FMU file (FMI 2.0 or 3.0, co-simulation or model exchange)")

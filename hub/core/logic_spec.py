@@ -34,6 +34,20 @@ class LogicSpec:
 CO_SIMULATION, MODEL_EXCHANGE = INTERFACES = ("co-simulation", "model-exchange")
 SOLVERS = ("cvode", "euler")
 
+#: Where an object's logic runs (`runs:`): `hub` — in the hub's process; `child` — in a child
+#: process over a pipe; `bus` — in a participant process over the Zenoh bus. hub/logic/factory.py
+#: makes the slave for each.
+RUNS = ("hub", "child", "bus")
+
+#: The keys `runs:` replaced, by value as written, with what to write instead ("*": any other
+#: value): a module's schema names those it had in its `x-replaced`, and the scenario checker
+#: says so at the old key's line.
+REPLACED = {
+    "isolate": {"true": "runs: child", "false": "runs: hub", "*": "runs: child` or `runs: hub"},
+    "participant": {"launch": "runs: bus", "join": "runs: bus` with `launch: false", "*": "runs: bus"},
+    "in_process": {"true": "runs: hub", "false": "runs: bus", "*": "runs: hub` or `runs: bus"},
+}
+
 # `logic:` in a scenario object is `default` (the module's own FMU) or these options, which
 # may name a replacement `file` and take the `fmu` module's other options.
 OPTIONS = {
@@ -42,7 +56,7 @@ OPTIONS = {
         "file": {"type": "string", "description": "a replacement FMU, relative to the scenario file"},
         "parameters": {"type": "object"},
         "map": {"type": "object", "additionalProperties": {"type": "string"}},
-        "isolate": {"type": "boolean"},
+        "runs": {"enum": ["hub", "child"]},
         "step": {"type": "number", "exclusiveMinimum": 0},
         "on_bad_value": {"enum": ["stop", "hold"]},
         "step_timeout": {"type": "number", "exclusiveMinimum": 0},
@@ -52,6 +66,7 @@ OPTIONS = {
         "tolerance": {"type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 1},
     },
     "additionalProperties": False,
+    "x-replaced": {"isolate": REPLACED["isolate"]},
 }
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from hub.bus.lockstep import RemoteSpec
 from hub.core.errors import SimulationError
+from hub.core.logic_spec import RUNS
 from hub.core.slave import LogicSlave
 from hub.logic.fmi import FmuInterface
 from hub.logic.fmi_me import Integration, open_fmu
@@ -16,9 +17,8 @@ from hub.logic.isolated import IsolatedFmu
 from hub.logic.remote import RemoteSlave
 from hub.logic.watchdog import WATCHDOG
 
-#: Where logic runs: `hub` — in the hub's process; `child` — in a child process over a pipe;
-#: `bus` — in a participant process over the Zenoh bus (launched by the hub or joining).
-TRANSPORTS = ("hub", "child", "bus")
+#: Where logic runs, an object's `runs:` (hub/core/logic_spec.py).
+TRANSPORTS = RUNS
 
 
 @dataclass(frozen=True)

@@ -60,7 +60,7 @@ class Watchdog:
     def _hung(self, slave, seconds: float) -> None:
         message = (f"FMU instance {slave.instance!r} ({slave.interface.path.name}) at t = {slave.time:.9g} s: its step "
                    f"has not returned for {seconds:.1f} s (step_timeout {slave.step_timeout:g} s); an FMU in the hub's "
-                   f"process cannot be interrupted, so planthub ends here (run it with `isolate: true` to have only "
+                   f"process cannot be interrupted, so planthub ends here (run it with `runs: child` to have only "
                    f"its worker killed); the recording so far is kept")
         with self._lock:
             handlers = list(self._handlers.values())

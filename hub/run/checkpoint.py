@@ -29,7 +29,7 @@ FORMAT = 1
 MAGIC = b"planthub checkpoint\n"
 #: Object parameters that may differ between the run that saved and the one that resumes: where
 #: logic runs (in the hub, in a child process, over the bus) changes no result.
-_WHERE_LOGIC_RUNS = ("in_process", "isolate", "participant")
+_WHERE_LOGIC_RUNS = ("runs", "launch")
 
 
 @dataclass(frozen=True)

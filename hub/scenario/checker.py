@@ -143,6 +143,16 @@ def _bus_settings(bus: dict, base: Path) -> BusSettings:
                        control=control, publish=get("publish", str), watch=watch)
 
 
+def _replaced(schema: dict, key: str, value) -> str | None:
+    """What to write instead of a key the schema no longer takes (its `x-replaced`: key → its
+    value as written in YAML → the replacement; "*" for any value), or None for a key it never had."""
+    instead = schema.get("x-replaced", {}).get(key)
+    if instead is None:
+        return None
+    written = value if isinstance(value, str) else json.dumps(value)
+    return f"{key} is gone: write `{instead.get(written, instead.get('*'))}` instead"
+
+
 def _scenario_schema() -> dict:
     return json.loads((SCHEMAS / "scenario.schema.json").read_text())
 
@@ -200,7 +210,8 @@ class _Checker:
             if error.validator == "additionalProperties":
                 known = error.schema.get("properties", {})
                 for key in sorted(set(error.instance) - set(known)):
-                    self.problem(where + (key,), f"unknown key {key!r}{did_you_mean(key, known)}")
+                    self.problem(where + (key,), _replaced(error.schema, key, error.instance[key])
+                                 or f"unknown key {key!r}{did_you_mean(key, known)}")
             elif error.validator == "required":
                 self.problem(where, error.message.replace("is a required property", "is missing"))
             else:

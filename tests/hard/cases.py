@@ -617,7 +617,7 @@ def bottling_plant(seconds: float = PLANT_SECONDS, progress=None) -> Result:
     PLANT_RSS_GROWTH); none tilted past PLANT_TILT; nothing non-finite, faster than 2× the belts
     or through a closed stopper or separator gate. `progress(text)` hears each simulated minute."""
     overrides = {"run.duration": seconds, "run.orders": PLANT_SUPPLY + 20, "objects.pallet.count": PLANT_SUPPLY,
-                 "objects.control.in_process": True, "expect": []}
+                 "objects.control.runs": "hub", "expect": []}
     scenario = load_scenario(PLANT, overrides)
     result = Result(f"bottling plant, {seconds:g} s")
     rate = scenario.run.physics_rate

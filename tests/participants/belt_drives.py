@@ -62,7 +62,7 @@ KINDS = {"slow": SlowOnEvenSteps, "fails": FailsAt, "plain": BeltDrive, "ints": 
 
 
 def participant(argv):
-    """The logic for `in_process: true`: the kind named by the first argument."""
+    """The logic for `runs: hub`: the kind named by the first argument."""
     return KINDS[argv[0]]()
 
 
