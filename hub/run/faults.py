@@ -225,14 +225,18 @@ class _PartStuck(_Effect):
 class _ReaderFault(_Effect):
     ENTRY = ("on_enter", "object", "destination", "filled", "capped")
 
+    def begin(self):
+        values = self.book.signals.values   # what it read last: kept while it reads nothing
+        self.kept = [(self.slot[name], values[self.slot[name]]) for name in self.ENTRY if name in self.slot]
+
     def apply(self, signals, direction):
         if direction is not Direction.SOURCE:
             return
         slot = self.slot
         if self.value["reads"] == "nothing":
-            for name in self.ENTRY:
-                if name in slot:
-                    signals.active[slot[name]] = False
+            for i, value in self.kept:
+                signals.values[i] = value
+                signals.active[i] = False
         elif signals.active[slot["on_enter"]]:
             signals.values[slot["destination"]] = self.value["destination"]
             if "object" in slot:
