@@ -52,7 +52,7 @@ def test_wrong_control_fails_naming_what_went_wrong(fmus, tmp_path):
 def test_a_scenario_without_expectations_is_named(tmp_path):
     proc = planthub_test(ROOT / "scenarios" / "belt_bottle_sensor.yaml")
     assert proc.returncode == 2
-    assert proc.stderr == f"planthub: {ROOT / 'scenarios' / 'belt_bottle_sensor.yaml'} has no `expect:` entries to judge\n"
+    assert proc.stderr == f"planthub: {ROOT / 'scenarios' / 'belt_bottle_sensor.yaml'} has no `expect:` entries and no `exercise:` to judge\n"
 
 
 def test_show_names_the_culprit_with_each_failure(fmus, write_scenario):
@@ -173,18 +173,18 @@ def test_allow_empty_goes_with_always_and_when(write_scenario):
 
 
 def test_an_interrupted_run_keeps_what_is_settled_and_leaves_the_rest_unjudged():
-    """At tick 300 (2 s at 150 Hz): a jam seen and orders delivered are settled; no jam so far,
+    """At tick 300 (2 s at 150 Hz): a jam seen and orders out are settled; no jam so far,
     orders short and an `always` whose `when` has not fired yet could each still change."""
     from hub.core.slots import SlotRef, SlotType
     from hub.scenario.expectations import Expectation, Implied, NoJam, Outcome, interrupted
 
     waiting = Expectation("only B", SlotRef("end", "bin", "object"), SlotType.STRING, "==", "B", always=True,
                           when=SlotRef("end", "bin", "taken"))
-    orders = Implied("the run ends with its 4 orders delivered (run.orders)")
+    orders = Implied("the run ends with its 4 orders out (run.orders)")
     outcomes = [Outcome(NoJam("no jam"), False, "1 jammed: b1 on belt from 1.2 s"),
                 Outcome(NoJam("no jam"), True, "held"),
                 Outcome(orders, True, "4 delivered"),
-                Outcome(orders, False, "the run ended at t = 2 s with 1 of 4 orders delivered"),
+                Outcome(orders, False, "the run ended at t = 2 s with 1 of 4 orders out"),
                 Outcome(waiting, False, "never judged: end.bin.taken never fired (say `allow_empty: true` if that "
                                         "is a pass)")]
     judged = interrupted(outcomes, 300, 150)
@@ -193,5 +193,5 @@ def test_an_interrupted_run_keeps_what_is_settled_and_leaves_the_rest_unjudged()
     when = "not judged: the run was interrupted at t = 2 s"
     assert [o.message for o in judged] == [
         "1 jammed: b1 on belt from 1.2 s", f"{when} (so far: held)", "4 delivered",
-        f"{when} (so far: the run ended at t = 2 s with 1 of 4 orders delivered)",
+        f"{when} (so far: the run ended at t = 2 s with 1 of 4 orders out)",
         f"{when} (so far: never judged: end.bin.taken never fired (say `allow_empty: true` if that is a pass))"]

@@ -18,7 +18,28 @@ def test_the_run_ends_at_the_point_its_last_order_is_delivered(tmp_path):
     # The event log reports a bottle taken at the point after the tick it entered the sink,
     # the point at which the run ends.
     assert summary["simulated"]["seconds"] == pytest.approx(times[-1]) and times[-1] < 6.5
-    assert f"  ended        4 orders delivered at t = {times[-1]:.9g} s (run.orders)" in stdout.splitlines()
+    assert f"  ended        4 orders out at t = {times[-1]:.9g} s (run.orders)" in stdout.splitlines()
+
+
+def test_orders_out_count_the_reject_lane_and_say_how_they_divide(write_scenario, tmp_path):
+    """An order is out once its bottle left the line, at a lane's sink or a reject sink: two belts,
+    one ending at a sink, one at a reject sink."""
+    path = write_scenario("""
+        planthub: 1
+        run: {duration: 6.0, orders: 5}
+        objects:
+          lane: {module: conveyor, position: [0, 0, 0], length: 1.0}
+          made: {module: source, position: [0.05, 0, 0], count: 3, prefix: G, interval: 0.5}
+          sink: {module: sink, position: [0.95, 0, 0.05]}
+          scrap: {module: conveyor, position: [0, 1, 0], length: 1.0}
+          bad: {module: source, position: [0.05, 1, 0], count: 2, prefix: S, interval: 0.5}
+          reject: {module: sink, position: [0.95, 1, 0.05], rejects: true}
+        """)
+    stdout, summary = planthub_run(path, tmp_path)
+    assert summary["plant"]["delivered"] == 3 and len(summary["plant"]["rejected"]) == 2
+    assert summary["orders"] == {"wanted": 5, "out": 5, "rejected": 2, "met": True}
+    ended = [line for line in stdout.splitlines() if line.startswith("  ended")]
+    assert ended[0].startswith("  ended        5 orders out (3 delivered, 2 rejected) at t = ")
 
 
 def test_the_duration_stays_the_limit_and_the_api_stops_at_the_orders_too(tmp_path):
@@ -27,7 +48,7 @@ def test_the_duration_stays_the_limit_and_the_api_stops_at_the_orders_too(tmp_pa
         assert result.stopped_by == "" and sim.time == 3.0 and sim.summary().plant.delivered < 6
     with Simulation(SOURCE_SINK, {"run.orders": 2}) as sim:
         result = sim.run()
-        assert sim.summary().plant.delivered == 2 and result.stopped_by.startswith("2 orders delivered at t = ")
+        assert sim.summary().plant.delivered == 2 and result.stopped_by.startswith("2 orders out at t = ")
         stopped = sim.time
         sim.run()                     # the run is over: nothing more happens
         assert sim.time == stopped and sim.summary().plant.delivered == 2

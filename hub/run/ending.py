@@ -12,7 +12,7 @@ WORDS = {"duration": "ended", "completed": "ended", "stopped": "stopped", "close
 @dataclass(frozen=True)
 class Ending:
     """`kind`: `duration` (it reached run.duration), `completed` (a stop condition ended it as
-    planned: its orders delivered), `stopped` (an operator's stop, Ctrl-C), `closed` (its owner
+    planned: its orders out), `stopped` (an operator's stop, Ctrl-C), `closed` (its owner
     closed it before its end: a Simulation), `failed` (an error ended it); `reason` says it in words,
     with the time."""
 

@@ -17,7 +17,7 @@ class RunResult:
     rate: int
     wall_seconds: float
     stopped_by: str = ""    # why the run ended before the scenario's end (an operator's stop, its orders)
-    ended: bool = False     # that was a normal end (its orders delivered), not a stop
+    ended: bool = False     # that was a normal end (its orders out), not a stop
 
     @property
     def sim_seconds(self) -> float:
@@ -80,7 +80,7 @@ class Master:
         self.pacer = pacer
         self.hold = hold   # hub/run/hold.py: an operator's pause, resume and single steps
         self._closed = False
-        self.stopped: Stop | None = None   # set, the run is over (an operator's stop, its orders delivered)
+        self.stopped: Stop | None = None   # set, the run is over (an operator's stop, its orders out)
         comps = plant.components
         # Only components that do something in a hook are called: a scene of 100 bottles should
         # not pay 200 empty calls per communication step.

@@ -42,7 +42,7 @@ class Expectation:
 @dataclass(frozen=True)
 class Implied:
     """An expectation a scenario's setting implies, judged by the module that contributes it: with
-    `run.orders`, that the run ends with its orders delivered, not by its duration."""
+    `run.orders`, that the run ends with its orders out, not by its duration."""
 
     name: str
     line: int | None = None
