@@ -89,8 +89,8 @@ def test_command(args) -> int:
             write_junit(args.junit, Path(args.scenario).stem, [], 0.0, timestamp=datetime.now().replace(microsecond=0),
                         hostname=socket.gethostname(), properties=[("scenario", str(args.scenario))], error=str(exc))
         raise
-    if not scenario.expect:
-        raise UsageError(f"{args.scenario} has no `expect:` entries to judge")
+    if not scenario.expect and scenario.exercise is None:
+        raise UsageError(f"{args.scenario} has no `expect:` entries and no `exercise:` to judge")
     if args.out is not None:
         _check_replay(args, args.out)
     bus, pacer = _bus(args, scenario), _pacer(args, scenario)

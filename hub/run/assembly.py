@@ -90,6 +90,11 @@ class Run:
                 self.faults.attach(scheduled)
                 manipulators = [FaultSchedule(plant, scenario.faults, scheduled), scheduled]
             self.contributed = _contributions(scenario, plant)
+            from hub.run.exercise import FaultsFigure, Score   # the faults that began, the exercise's score
+            if scenario.faults:
+                self.contributed.append(FaultsFigure(self.faults, rate))
+            if scenario.exercise is not None:
+                self.contributed.append(Score(scenario.exercise, self.contributed, self.faults, rate))
             self.bodies = None   # the body recording, for playback (run.record_bodies)
             if self.out is not None and scenario.run.record_bodies:
                 from hub.view.bodies_file import BodyRecorder   # pyarrow is loaded only for it

@@ -128,13 +128,15 @@ class Simulation:
 
     def check(self) -> list[Outcome]:
         """The scenario's expectations judged on what was seen so far, in the scenario's order, then
-        what its settings imply (with `run.orders`: that the run ends with its orders delivered)."""
+        what its settings imply (with `run.orders`: that the run ends with its orders out)."""
         on_slots = iter(self.watcher.judge())
         plant = self.summary().plant
         jams = plant.jams if plant is not None else ()
         outcomes = [e.judge(jams, self.time) if isinstance(e, NoJam) else next(on_slots) for e in self.scenario.expect]
         # What the scenario's settings promise, judged by the modules that contribute them (run.orders).
         outcomes += [c.outcome(self.master.tick) for c in self._run.contributed if hasattr(c, "outcome")]
+        # An exercise's goals and its score (hub/run/exercise.py Score), each judged as a case.
+        outcomes += [o for c in self._run.contributed if hasattr(c, "outcomes") for o in c.outcomes(self.master.tick)]
         if self.interruption is not None and self.interruption.interrupted:
             return interrupted(outcomes, self.master.tick, self.scenario.run.physics_rate)
         return outcomes
