@@ -27,6 +27,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 GOALS = ("delivered", "misrouted", "longest_jam", "recover_within", "throughput")
+NO_PLANT = "an exercise's goals are judged on a plant, a scenario with a source or a sink; this one has neither"
 
 
 @dataclass(frozen=True)
@@ -65,18 +66,21 @@ class Verdict:
 
 
 def check_exercise(checker, spec, plant: bool) -> Exercise | None:
-    """The `exercise:` section's meaning (its shape is the schema's), problems noted on `checker`."""
+    """The `exercise:` section's meaning (its shape is the schema's), problems noted on `checker`:
+    each goal the schema took is judged, and the exercise is made only when all of it is sound."""
     from hub.scenario.yamlsource import line_of
 
-    if not isinstance(spec, dict) or not checker.intact(("exercise",)):
+    if not isinstance(spec, dict):
         return None
     if not plant:
-        checker.problem(("exercise",), "an exercise's goals are judged on a plant, a scenario with a source or a "
-                                       "sink; this one has neither")
+        checker.problem(("exercise",), NO_PLANT)
         return None
+    listed = spec.get("goals") if isinstance(spec.get("goals"), list) else []
     goals, names = [], set()
-    for i, goal in enumerate(spec["goals"]):
+    for i, goal in enumerate(listed):
         at = ("exercise", "goals", i)
+        if not isinstance(goal, dict) or not checker.intact(at):
+            continue
         keys = [k for k in GOALS if k in goal]
         if len(keys) != 1:
             checker.problem(at, f"give exactly one goal of {', '.join(GOALS)}"
@@ -90,7 +94,7 @@ def check_exercise(checker, spec, plant: bool) -> Exercise | None:
             continue
         names.add(name)
         goals.append(Goal(key, goal[key], made.points, name, made.line))
-    if len(goals) != len(spec["goals"]):
+    if len(goals) != len(listed) or not checker.intact(("exercise",)):
         return None
     return Exercise(spec["task"], tuple(goals), float(spec.get("pass", 100)), line_of(checker.lines, ("exercise",)))
 

@@ -90,7 +90,7 @@ def target_component(kind: str, target: str, tables: dict) -> tuple[str | None, 
         return target, None
     found = [c for c, slots in by.items() if fits(kind, c, slots)]
     if not found:
-        return None, f"object {obj!r} has no {WHAT[kind]}, which {kind} needs"
+        return None, f"object {obj!r} has no component that is {WHAT[kind]}, which {kind} needs"
     if len(found) > 1:
         return None, f"{obj!r} has several: name one ({', '.join(f'{obj}.{c}' for c in found)})"
     return f"{obj}.{found[0]}", None
@@ -186,6 +186,8 @@ def check_faults(checker, specs: list, tables: dict, run) -> list[FaultSpec]:
             continue
         kind = spec["kind"]
         name = spec.get("name") or f"{kind} {spec['target']}"
+        if "name" not in spec and name in names:
+            name = f"{name} (faults[{i}])"   # unnamed faults of one kind at one target, told apart
         if name in names:
             checker.problem(at + ("name",) if "name" in spec else at,
                             f"two faults are named {name!r} (the other at line {names[name]}): name them apart")
@@ -235,7 +237,7 @@ def check_faults(checker, specs: list, tables: dict, run) -> list[FaultSpec]:
                 continue
             event, count = found[0], spec["after"].get("count", 1)
         if start is not None and start > end:
-            checker.problem(at + next(k for k in ("at", "between") if k in spec),
+            checker.problem(at + ("at" if "at" in spec else "between",),
                             f"starts at {start / rate:g} s, after the run's end at {end / rate:g} s")
             continue
         duration = until = None
