@@ -1,6 +1,6 @@
 """`make bench`: one report — build/bench/report.md with its PNG plots, and report.json with every figure.
 
-Sections, in order: the headline figures README quotes; speed against error, scene by scene
+Sections, in order: the headline figures; speed against error, scene by scene
 (tests/bench_error.py), each with a plot of cost against error, its Pareto front and where the
 defaults sit; the hub against bare pybullet for 10 … 1000 bottles; and the cost sections that
 `make bench` printed before the report (plant elements, bottle models, FMU stepping, latency, the
@@ -8,9 +8,10 @@ recorder, Zenoh, the bottling plant, Petri nets, the view), each next to its flo
 sections still print their markdown tables; here they are captured, put into report.md as they
 are, and their tables parsed into report.json (a cell that reads as a number becomes one).
 
-Benchmarks report; they assert nothing. The report is never committed: README quotes its
-headline figures and says how to make it. `python -m tests.bench_report error` (or `scaling`,
-`costs`) makes only those parts.
+Benchmarks report; they assert nothing. The report is never committed; a whole report also writes
+the benchmark section of tests/README.md, between its markers (tests/bench_readme.py).
+`python -m tests.bench_report error` (or `scaling`, `costs`) makes only those parts, and leaves
+tests/README.md alone.
 """
 from __future__ import annotations
 
@@ -418,6 +419,11 @@ def main(parts: list[str]) -> int:
     report.figures["failures"] = report.failures
     report.figures["wall_minutes"] = round((time.perf_counter() - began) / 60, 1)
     path = report.write("\n".join(headline))
+    if set(parts) >= {"error", "scaling", "costs"}:
+        from . import bench_readme
+
+        bench_readme.write(report.figures)
+        print(f"wrote the benchmark section of {bench_readme.README}", flush=True)
     print("\n".join(headline))
     print(f"\nwrote {path} and report.json, with {len(list(OUT.glob('*.png')))} plots", flush=True)
     for failure in report.failures:
