@@ -1,0 +1,104 @@
+"""Exercises (`exercise:`): each goal judged on the plant's figures and the faults' start times, the
+score in the printed summary and summary.json, and each goal and the score as a case of `planthub
+test` (its JUnit file and exit code).
+
+    a ─ b ─[reader]─ sw (main slowed to half from 0.5 s to 1.5 s) ─ main_end
+"""
+from __future__ import annotations
+
+import json
+from types import SimpleNamespace
+from xml.etree import ElementTree
+
+from hub.scenario.exercise import Goal, judge, recovered
+from modules.plant.jams import Jam
+
+from .helpers import planthub
+
+SCENE = """
+    planthub: 1
+    name: ex
+    run: {duration: 4.5, physics_rate: 150}
+    objects:
+      sw: {module: switch, position: [0, 0, 0], length: 2.0, branch_at: 1.0, branch_length: 1.0, side: right}
+      a: {module: bottle, position: [0.10, 0, 0], id: A}
+      b: {module: bottle, position: [0.60, 0, 0], id: B}
+      main_end: {module: sink, position: [1.95, 0, 0.05]}
+    faults:
+      - {name: slow main, kind: belt_failure, target: sw.main, speed: 0.5, at: 0.5, for: 1}
+    exercise:
+      task: |
+        Deliver both bottles.
+        Quickly.
+      goals:
+        - {delivered: 2}
+        - {longest_jam: 0, points: 2}
+        - {recover_within: 4}
+        - {throughput: %s, name: fast enough}
+      pass: 80
+    """
+
+
+def test_run_prints_and_writes_the_goals_and_the_score(write_scenario, tmp_path, capsys):
+    path = write_scenario(SCENE % 100)
+    code, out, _ = planthub(capsys, "run", path, "--out", tmp_path / "run", "-q")
+    assert code == 0
+    lines = out.splitlines()
+    start = lines.index("  faults       1")
+    assert lines[start:start + 9] == [
+        "  faults       1",
+        "    slow main: belt_failure at sw.main from 0.500 s to 1.500 s",
+        "  exercise     Deliver both bottles.",
+        "               Quickly.",
+        "    ✓ at least 2 bottles delivered — 2 delivered",
+        "    ✓ no jam — no jam  (2 points)",
+        "    ✓ every fault recovered from within 4 s — slow main: 2.65 s",
+        "    ✗ fast enough — 26.67 a minute",
+        "  score        80 % (4 of 5 points): passed (passes at 80 %)"]
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["exercise"]["score"] == 80.0 and summary["exercise"]["passed"] is True
+    assert [(g["name"], g["met"]) for g in summary["exercise"]["goals"]] == [
+        ("at least 2 bottles delivered", True), ("no jam", True), ("every fault recovered from within 4 s", True),
+        ("fast enough", False)]
+    assert summary["faults"] == {"started": [{"name": "slow main", "kind": "belt_failure", "target": "sw.main",
+                                              "start": 0.5, "end": 1.5}]}
+
+
+def test_planthub_test_judges_each_goal_and_the_score(write_scenario, tmp_path, capsys):
+    path = write_scenario(SCENE % 20)
+    code, out, _ = planthub(capsys, "test", path, "--junit", tmp_path / "ex.xml")
+    assert code == 0
+    assert out.splitlines()[-2:] == ["  ✓ the score — 100 % (5 of 5 points): passed (passes at 80 %)", "5 passed, 0 failed"]
+    cases = ElementTree.parse(tmp_path / "ex.xml").getroot().findall(".//testcase")
+    assert [c.get("name") for c in cases] == ["at least 2 bottles delivered", "no jam",
+                                              "every fault recovered from within 4 s", "fast enough", "the score"]
+    path = write_scenario(SCENE % 100)
+    code, out, _ = planthub(capsys, "test", path, "--junit", tmp_path / "ex.xml")
+    assert code == 1 and "  ✗ fast enough — 26.67 a minute" in out.splitlines()
+    failed = ElementTree.parse(tmp_path / "ex.xml").getroot().find(".//failure")
+    assert failed.text == "expected at least 100 deliveries a minute: 26.67 a minute"
+
+
+def plant(times, jams=(), end=60.0, misrouted=()):
+    return SimpleNamespace(delivery_times=tuple(times), jams=tuple(jams), end=end, delivered=len(times),
+                           misrouted=tuple(misrouted), per_minute=60.0 * len(times) / end)
+
+
+def test_recovery_is_the_first_delivery_after_the_start_with_no_jam_open():
+    jam = Jam("M3", "b02", 12.0, 20.0)
+    assert recovered(10.0, plant([5.0, 15.0, 19.0, 22.0], [jam])) == 22.0
+    assert recovered(10.0, plant([5.0, 11.0], [Jam("M3", "b02", 12.0, None)])) == 11.0
+    assert recovered(30.0, plant([5.0, 11.0])) is None
+    goal = Goal("recover_within", 10.0, 1, "back within 10 s")
+    verdict = judge(goal, plant([5.0, 15.0, 19.0, 22.0], [jam]), [("lane C", 10.0), ("late", 50.0)])
+    assert (verdict.met, verdict.message) == (False, "lane C: 12.00 s; late: not recovered by the end (10.00 s after "
+                                                     "its start)")
+
+
+def test_jam_and_misroute_goals_say_what_they_measured():
+    jam = Jam("M3", "b02", 12.0, None)
+    assert judge(Goal("longest_jam", 5.0, 1, "j"), plant([1.0], [jam], end=30.0), []).message == \
+        "1 jam, the longest M3 on b02 from 12.000 s for 18.00 s (still jammed at the end)"
+    wrong = SimpleNamespace(bottle="M7", destination="C", sink="sink_F")
+    verdict = judge(Goal("misrouted", 0, 1, "m"), plant([1.0], misrouted=[wrong]), [])
+    assert (verdict.met, verdict.message) == (False, "1 misrouted: M7 (for C) at sink_F")
