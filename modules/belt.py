@@ -1,12 +1,5 @@
 """What every belt segment (straight `conveyor`, `curve`) shares: its drive, its parameters, and how it is placed and built.
 
-| slot                  | type | dir    | meaning                                                |
-|-----------------------|------|--------|--------------------------------------------------------|
-| drive.speed           | real | target | target belt speed, m/s (negative runs backwards)       |
-| drive.run             | bool | target | true runs the belt, false stops it (speed kept)        |
-| drive.running         | bool | source | whether the belt runs, every step                      |
-| drive.velocity        | real | source | speed the field drives bottles to now, m/s, every step |
-
 Placing: a segment starts at `position` heading `yaw`, or `after: NAME` — where the belt NAME
 (declared before it) ends, heading on. Chained segments share their end point exactly, their
 force-field regions abut there (a bottle is handed over at one point, see
@@ -44,10 +37,10 @@ LOGIC = LogicSpec(
 
 class BeltDrive(Component):
     SLOTS = (
-        Slot.target("speed", "real", "target belt speed, m/s"),
-        Slot.target("run", "bool", "true runs the belt, false stops it"),
-        Slot.source("running", "bool", "whether the belt runs"),
-        Slot.source("velocity", "real", "speed the field drives bottles to now, m/s"),
+        Slot.target("speed", "real", "target belt speed, m/s (negative runs backwards)"),
+        Slot.target("run", "bool", "true runs the belt, false stops it (speed kept)"),
+        Slot.source("running", "bool", "whether the belt runs, every step"),
+        Slot.source("velocity", "real", "speed the field drives bottles to now, m/s, every step"),
     )
 
     STATE = ("speed", "running", "_applied", "_running", "_velocity")

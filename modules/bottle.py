@@ -1,14 +1,5 @@
 """Bottle: an upright rigid body with friction and restitution 0, at a chosen level of detail.
 
-| slot             | type   | dir    | meaning                                         |
-|------------------|--------|--------|-------------------------------------------------|
-| body.position    | vec3   | source | centre of mass, m, every step                   |
-| body.orientation | quat   | source | orientation (x, y, z, w), every step            |
-| body.velocity    | vec3   | source | linear velocity, m/s, every step                |
-| body.tilt        | real   | source | angle between its axis and the plumb line, deg  |
-| body.present     | bool   | source | on stage (false once a sink took it out)        |
-| tag.id           | string | source | the id an ID reader reads, every step           |
-
 Body slots are computed only when a flow or the recording reads them: a bottle nobody watches
 costs its physics and nothing more. Off stage (taken out by a sink) its pose slots keep the
 last values they had on stage and `present` is false: gone, not somewhere below the plant.
@@ -47,11 +38,11 @@ class BottleBody(Component):
     somewhere far below the plant."""
 
     SLOTS = (
-        Slot.source("position", "vec3", "centre of mass, m"),
-        Slot.source("orientation", "quat", "orientation quaternion (x, y, z, w)"),
-        Slot.source("velocity", "vec3", "linear velocity, m/s"),
-        Slot.source("tilt", "real", "angle between axis and plumb line, degrees"),
-        Slot.source("present", "bool", "on stage: false before a source released it and after a sink took it"),
+        Slot.source("position", "vec3", "centre of mass, m, every step"),
+        Slot.source("orientation", "quat", "orientation (x, y, z, w), every step"),
+        Slot.source("velocity", "vec3", "linear velocity, m/s, every step"),
+        Slot.source("tilt", "real", "angle between its axis and the plumb line, deg"),
+        Slot.source("present", "bool", "on stage (false once a sink took it out)"),
     )
 
     def __init__(self, obj, name, world, body):
@@ -77,7 +68,7 @@ class BottleBody(Component):
 
 
 class Tag(Component):
-    SLOTS = (Slot.source("id", "string", "the id an ID reader reads"),)
+    SLOTS = (Slot.source("id", "string", "the id an ID reader reads, every step"),)
 
     def __init__(self, obj, name, ident):
         super().__init__(obj, name)

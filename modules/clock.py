@@ -1,10 +1,5 @@
 """Clock: fires a void event at set times — a stand-in for the timers and logic that will drive the actuators.
 
-| slot        | type | dir    | meaning                                                  |
-|-------------|------|--------|----------------------------------------------------------|
-| clock.fire  | void | source | one of the set times was reached in this step            |
-| clock.count | int  | source | how many times it fired so far, every step               |
-
 Times are given as a list (`at`) or as a period (`every`, from `start`, at most `count` times).
 Each fires at the first communication point at or after its tick (time × physics rate,
 rounded), so a run is the same whatever the communication step divides it into; two times
@@ -19,8 +14,8 @@ from hub.core.slots import Slot
 
 class Clock(Component):
     SLOTS = (
-        Slot.source("fire", "void", "a set time was reached"),
-        Slot.source("count", "int", "how many times it fired so far"),
+        Slot.source("fire", "void", "one of the set times was reached in this step"),
+        Slot.source("count", "int", "how many times it fired so far, every step"),
     )
 
     STATE = ("next", "count")

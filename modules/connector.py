@@ -1,11 +1,5 @@
 """Connector: AND / OR over the activity of two void signals, each optionally negated.
 
-| slot           | type | dir    | meaning                                        |
-|----------------|------|--------|------------------------------------------------|
-| logic.in0      | void | target | first signal: active when a flow fed it        |
-| logic.in1      | void | target | second signal                                  |
-| logic.out      | void | source | active when `op` over the (negated) inputs holds |
-
 The output follows the inputs within the same step (zero delay), so connectors chained in a
 ring form a zero-delay loop, which the scenario check rejects.
 """
@@ -18,9 +12,9 @@ from hub.core.slots import Slot
 
 class Logic(Component):
     SLOTS = (
-        Slot.target("in0", "void", "first signal"),
+        Slot.target("in0", "void", "first signal: active when a flow fed it"),
         Slot.target("in1", "void", "second signal"),
-        Slot.source("out", "void", "result"),
+        Slot.source("out", "void", "active when `op` over the (negated) inputs holds"),
     )
     FEEDTHROUGH = (("in0", "out"), ("in1", "out"))
 

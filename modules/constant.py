@@ -1,10 +1,5 @@
 """Constant: turns an event into a value — emits a fixed value whenever its `set` slot fires.
 
-| slot         | type          | dir    | meaning                                               |
-|--------------|---------------|--------|-------------------------------------------------------|
-| value.set    | void          | target | emit the value in this step                           |
-| value.out    | param `type`  | source | the fixed value; active when `set` fired (or always)  |
-
 With `always: true` the value is emitted in every step, as a setpoint that never changes.
 `value.out` holds the value from the start, so a flow with `when: target` pulls it any time.
 The value follows `set` within the same step, so a sensor event can stop a belt at once.
@@ -13,7 +8,7 @@ from __future__ import annotations
 
 from hub.core.component import Component
 from hub.core.module import Module
-from hub.core.slots import Slot, SlotType
+from hub.core.slots import Slot, SlotFamily, SlotType
 
 
 class Value(Component):
@@ -50,12 +45,14 @@ class Constant(Module):
         "additionalProperties": False,
     }
     COMPONENTS = {"value": Value}
+    SLOT_FAMILIES = {"value": (SlotFamily.source("out", "param `type`", "the fixed value; active when `set` fired "
+                                                                        "(or always)"),)}
 
     @classmethod
     def slots(cls, params):
         kind = params.get("type", "real")
         return {"value": (Slot.target("set", "void", "emit the value in this step"),
-                          Slot.source("out", kind, "the fixed value"))}
+                          Slot.source("out", kind, cls.SLOT_FAMILIES["value"][0].doc))}
 
     @classmethod
     def check(cls, params) -> list[tuple[tuple, str]]:

@@ -1,10 +1,5 @@
 """Convert: a value passed on as another slot type or scale — int ↔ real, bool → number, a threshold, PLC analogue scaling.
 
-| slot      | type         | dir    | meaning                                                   |
-|-----------|--------------|--------|-----------------------------------------------------------|
-| value.in  | param `from` | target | the value to convert                                      |
-| value.out | param `to`   | source | the converted value; active in the steps a flow fed `in`  |
-
 `from` and `to` are each `bool`, `int` or `real`:
 
 | from → to          | rule                                                                         |
@@ -44,7 +39,7 @@ from hub.core import state
 from hub.core.component import Component
 from hub.core.errors import SimulationError
 from hub.core.module import Module
-from hub.core.slots import INT_RANGE, Slot, SlotType
+from hub.core.slots import INT_RANGE, Slot, SlotFamily, SlotType
 
 TYPES = ("bool", "int", "real")
 RANGE = {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2}
@@ -210,11 +205,15 @@ class Convert(Module):
         "additionalProperties": False,
     }
     COMPONENTS = {"value": Converter}
+    SLOT_FAMILIES = {"value": (
+        SlotFamily.target("in", "param `from`", "the value to convert"),
+        SlotFamily.source("out", "param `to`", "the converted value; active in the steps a flow fed `in`"))}
 
     @classmethod
     def slots(cls, params):
-        return {"value": (Slot.target("in", params.get("from", "real"), "the value to convert"),
-                          Slot.source("out", params.get("to", "real"), "the converted value"))}
+        given, made = cls.SLOT_FAMILIES["value"]
+        return {"value": (Slot.target("in", params.get("from", "real"), given.doc),
+                          Slot.source("out", params.get("to", "real"), made.doc))}
 
     @classmethod
     def check(cls, params) -> list[tuple[tuple, str]]:

@@ -1,12 +1,5 @@
 """Straight conveyor belt: a force-field region over a continuous support surface, with guard rails.
 
-| slot                  | type | dir    | meaning                                                |
-|-----------------------|------|--------|--------------------------------------------------------|
-| drive.speed           | real | target | target belt speed, m/s (negative runs backwards)       |
-| drive.run             | bool | target | true runs the belt, false stops it (speed kept)        |
-| drive.running         | bool | source | whether the belt runs, every step                      |
-| drive.velocity        | real | source | speed the field drives bottles to now, m/s, every step |
-
 Start it at `position`/`yaw`, or `after: NAME` to continue the belt NAME (see modules/belt.py);
 `curve` is its curved sibling, with the same slots.
 """

@@ -1,12 +1,5 @@
 """Curved conveyor belt: a force-field region on an annular sector, guard rails of boxes along the arc.
 
-| slot                  | type | dir    | meaning                                                |
-|-----------------------|------|--------|--------------------------------------------------------|
-| drive.speed           | real | target | target belt speed on the centre line, m/s              |
-| drive.run             | bool | target | true runs the belt, false stops it (speed kept)        |
-| drive.running         | bool | source | whether the belt runs, every step                      |
-| drive.velocity        | real | source | speed the field drives bottles to now, m/s, every step |
-
 The belt turns `left` or `right` by `angle` degrees on a centre line of `radius`. It moves as a
 rotating surface (ω = speed/radius about the curve's centre): with `grip: surface` (default)
 friction acts on both horizontal components towards ω×r, so a bottle turns with the belt at

@@ -1,10 +1,5 @@
 """FMU: logic or a plant-side model in an FMI 2.0 or 3.0 FMU, stepped at every communication point.
 
-| slot           | type        | dir    | meaning                                                  |
-|----------------|-------------|--------|----------------------------------------------------------|
-| logic.<input>  | the input's | target | each FMU input variable; the FMU's start value until fed |
-| logic.<output> | the output's| source | each FMU output variable, active every step              |
-
 Slot types by FMI type: Real, Float32/64 → real; Integer, Int8…64, UInt8…64, Enumeration → int
 (its range checked on every write); Boolean → bool; String → string; Binary → string of hex;
 an FMI 3 array → one slot per element (`u_0`, `A_0_1`); clocks and structural parameters are not
@@ -51,7 +46,7 @@ from hub.logic.fmi_variables import parameter_problems, parameter_values
 from hub.logic.ports import fmu_ports
 from hub.core.module import Module
 from hub.core.registry import did_you_mean
-from hub.core.slots import SlotType
+from hub.core.slots import SlotFamily, SlotType
 
 _SLOT_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
@@ -105,6 +100,9 @@ class Fmu(Module):
         "x-replaced": {key: REPLACED[key] for key in ("isolate", "participant")},
     }
     COMPONENTS = {"logic": LogicComponent}
+    SLOT_FAMILIES = {"logic": (
+        SlotFamily.target("<input>", "the input's", "each FMU input variable; the FMU's start value until fed"),
+        SlotFamily.source("<output>", "the output's", "each FMU output variable, active every step"))}
 
     @classmethod
     def check(cls, params):

@@ -1,16 +1,5 @@
 """Gates: fixed bodies whose collision the plant switches on and off, as the paper's switches and separators do.
 
-| slot           | type | dir    | meaning                                                          |
-|----------------|------|--------|------------------------------------------------------------------|
-| gate.open      | void | target | open: let bottles pass                                           |
-| gate.close     | void | target | close: block the belt (waits until no bottle is in the way)      |
-| gate.closed    | bool | target | true closes, false opens (a level instead of two events)         |
-| gate.is_closed | bool | source | the gate is closed and blocks, every step                        |
-| gate.is_open   | bool | source | the gate is open, every step (both false while it moves)         |
-| gate.on_closed | void | source | the gate reached closed                                          |
-| gate.on_opened | void | source | the gate reached open                                            |
-| gate.blocked   | bool | source | a close waits for a bottle to clear the gate, every step         |
-
 Timing, in physics ticks at communication points: opening turns the collision off at once (the
 gate leaves the path) and reports `on_opened` after `travel_time`; closing turns it on after
 `travel_time`, and only once no bottle comes within MARGIN of the gate's boxes, because
@@ -239,12 +228,12 @@ class Gate(TwoPositions):
     SLOTS = (
         Slot.target("open", "void", "open: let bottles pass"),
         Slot.target("close", "void", "close: block the belt (waits until no bottle is in the way)"),
-        Slot.target("closed", "bool", "true closes, false opens"),
-        Slot.source("is_closed", "bool", "closed and blocking"),
-        Slot.source("is_open", "bool", "open (false while moving)"),
-        Slot.source("on_closed", "void", "reached closed"),
-        Slot.source("on_opened", "void", "reached open"),
-        Slot.source("blocked", "bool", "a close waits for a bottle to clear the gate"),
+        Slot.target("closed", "bool", "true closes, false opens (a level instead of two events)"),
+        Slot.source("is_closed", "bool", "the gate is closed and blocks, every step"),
+        Slot.source("is_open", "bool", "the gate is open, every step (both false while it moves)"),
+        Slot.source("on_closed", "void", "the gate reached closed"),
+        Slot.source("on_opened", "void", "the gate reached open"),
+        Slot.source("blocked", "bool", "a close waits for a bottle to clear the gate, every step"),
     )
     NAMES = {"to_passable": "open", "to_solid": "close", "level": "closed", "is_solid": "is_closed",
              "is_passable": "is_open", "reached_solid": "on_closed", "reached_passable": "on_opened",

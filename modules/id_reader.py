@@ -1,17 +1,5 @@
 """ID reader (bar code scanner): a volume trigger that reads the id of each bottle entering and leaving.
 
-| slot                | type   | dir    | meaning                                                        |
-|---------------------|--------|--------|----------------------------------------------------------------|
-| trigger.on_enter    | void   | source | a bottle entered the volume in this step                       |
-| trigger.on_stay     | void   | source | a bottle was inside at some tick of this step                  |
-| trigger.on_leave    | void   | source | a bottle left the volume in this step                          |
-| trigger.object      | string | source | id of the bottle that entered last; active with on_enter       |
-| trigger.occupied    | bool   | source | whether a bottle is inside now, every step                     |
-| trigger.left        | string | source | id of the bottle that left last; active with on_leave          |
-| trigger.destination | string | source | destination of the bottle that entered last; with on_enter     |
-| trigger.filled      | bool   | source | whether that bottle is filled; with on_enter                   |
-| trigger.capped      | bool   | source | whether that bottle is capped; with on_enter                   |
-
 A plant-management system routes by the id read on entry (the paper's switches ask for the
 destination of the incoming bottle) and tracks where each bottle is by the id that left; both
 are in the event log with their exact tick. The destination, fill and cap state come from the
@@ -30,10 +18,10 @@ from modules.trigger import VolumeTrigger, add_volume, volume_parameters
 
 class IdTrigger(VolumeTrigger):
     SLOTS = VolumeTrigger.SLOTS + (
-        Slot.source("left", "string", "id of the bottle that left last"),
-        Slot.source("destination", "string", "destination of the bottle that entered last"),
-        Slot.source("filled", "bool", "whether the bottle that entered last is filled"),
-        Slot.source("capped", "bool", "whether the bottle that entered last is capped"),
+        Slot.source("left", "string", "id of the bottle that left last; active with on_leave"),
+        Slot.source("destination", "string", "destination of the bottle that entered last; with on_enter"),
+        Slot.source("filled", "bool", "whether that bottle is filled; with on_enter"),
+        Slot.source("capped", "bool", "whether that bottle is capped; with on_enter"),
     )
 
     def sense(self, tick):

@@ -1,16 +1,5 @@
 """Inspector (fill-level and cap check): a volume trigger that checks each bottle entering it and fires `failed` for one that is not filled or not capped.
 
-| slot              | type   | dir    | meaning                                                         |
-|-------------------|--------|--------|-----------------------------------------------------------------|
-| trigger.on_enter  | void   | source | a bottle entered the volume in this step                        |
-| trigger.on_stay   | void   | source | a bottle was inside at some tick of this step                   |
-| trigger.on_leave  | void   | source | a bottle left the volume in this step                           |
-| trigger.object    | string | source | id of the bottle that entered last; active with on_enter        |
-| trigger.occupied  | bool   | source | whether a bottle is inside now, every step                      |
-| trigger.passed    | void   | source | a bottle that entered in this step passed the check             |
-| trigger.failed    | void   | source | a bottle that entered in this step failed it                    |
-| trigger.checked   | string | source | id of the bottle checked last; active with passed and failed    |
-
 What a bottling line has after its capper: a fill-level and cap inspection whose reject signal
 fires the ejector (modules/pusher.py) for a bottle that is not as it should be. A bottle passes
 when it has every state in `requires` (`filled`, `capped`) in the plant's manifest
@@ -35,7 +24,7 @@ class Inspection(VolumeTrigger):
     SLOTS = VolumeTrigger.SLOTS + (
         Slot.source("passed", "void", "a bottle that entered in this step passed the check"),
         Slot.source("failed", "void", "a bottle that entered in this step failed it"),
-        Slot.source("checked", "string", "id of the bottle checked last"),
+        Slot.source("checked", "string", "id of the bottle checked last; active with passed and failed"),
     )
 
     STATE = VolumeTrigger.STATE + ("results",)

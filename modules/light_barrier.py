@@ -1,13 +1,5 @@
 """Light barrier (binary sensor): a box volume trigger latched over the physics substeps.
 
-| slot             | type   | dir    | meaning                                                       |
-|------------------|--------|--------|---------------------------------------------------------------|
-| trigger.on_enter | void   | source | an object entered the volume in this step                     |
-| trigger.on_stay  | void   | source | an object was inside at some tick of this step                |
-| trigger.on_leave | void   | source | an object left the volume in this step                        |
-| trigger.object   | string | source | id of the object that entered last; active with on_enter      |
-| trigger.occupied | bool   | source | whether an object is inside now, every step                   |
-
 Enter and leave events go to the event log with the exact physics tick and the object's id;
 an object that enters and leaves between two communication points gives both events.
 """

@@ -1,10 +1,5 @@
 """Participant: logic served by another process over the Zenoh bus, stepped in lockstep.
 
-| slot           | type        | dir    | meaning                                          |
-|----------------|-------------|--------|--------------------------------------------------|
-| logic.<input>  | declared    | target | each entry of `inputs`, sent with every step     |
-| logic.<output> | declared    | source | each entry of `outputs`, from the step's answer  |
-
 The process (any language: schemas/wire.md; in Python: `hub.participant`) announces the same
 inputs and outputs and gets `parameters` when the hub welcomes it. With `command` the hub starts
 it (in `cwd`, default the scenario's folder; `python` is the hub's own interpreter) and stops it
@@ -26,7 +21,7 @@ from hub.logic.component import LogicComponent
 from hub.logic.factory import SlavePlan, make_slave
 from hub.core.logic_spec import REPLACED, RUNS, own_step_problems
 from hub.core.module import Module
-from hub.core.slots import Slot, SlotType
+from hub.core.slots import Slot, SlotFamily, SlotType
 
 _NAME = "^[A-Za-z_][A-Za-z0-9_]*$"
 _TYPES = [t.value for t in SlotType]
@@ -64,6 +59,9 @@ class ParticipantModule(Module):
         "x-replaced": {"in_process": REPLACED["in_process"]},
     }
     COMPONENTS = {"logic": LogicComponent}
+    SLOT_FAMILIES = {"logic": (
+        SlotFamily.target("<input>", "declared", "each entry of `inputs`, sent with every step"),
+        SlotFamily.source("<output>", "declared", "each entry of `outputs`, from the step's answer"))}
 
     @classmethod
     def check(cls, params):

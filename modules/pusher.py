@@ -1,16 +1,5 @@
 """Pusher: a kinematic ejector beside a belt that, on a command, shoves the bottle in front of it sideways off the belt into a reject lane.
 
-| slot             | type | dir    | meaning                                                             |
-|------------------|------|--------|---------------------------------------------------------------------|
-| push.push        | void | target | push: the plate goes out across the belt and comes back             |
-| push.busy        | bool | source | a stroke is under way (command to return), every step               |
-| push.extended    | bool | source | the plate stands out at full stroke, every step                     |
-| push.on_extended | void | source | the plate reached full stroke                                       |
-| push.on_returned | void | source | the plate is back at rest: the pusher takes the next command        |
-| push.refused     | void | source | a push came while a stroke was under way and was ignored            |
-| main.speed …     |      |        | the belt's drive: speed, run, running, velocity (see conveyor)      |
-| lane.speed …     |      |        | the reject lane's drive, the same slots                             |
-
 As on a bottling line that rejects unfilled or uncapped bottles: a straight belt (`length`,
 placed like a conveyor) with a plate standing in the guard rail on one side at `at`, and a reject
 lane — a belt of `lane_width` and `lane_length` — leaving to the other `side` there, at right
@@ -55,10 +44,10 @@ SIDES = {"left": 1, "right": -1}
 class Push(Component):
     SLOTS = (
         Slot.target("push", "void", "push: the plate goes out across the belt and comes back"),
-        Slot.source("busy", "bool", "a stroke is under way"),
-        Slot.source("extended", "bool", "the plate stands out at full stroke"),
+        Slot.source("busy", "bool", "a stroke is under way (command to return), every step"),
+        Slot.source("extended", "bool", "the plate stands out at full stroke, every step"),
         Slot.source("on_extended", "void", "the plate reached full stroke"),
-        Slot.source("on_returned", "void", "the plate is back at rest"),
+        Slot.source("on_returned", "void", "the plate is back at rest: the pusher takes the next command"),
         Slot.source("refused", "void", "a push came while a stroke was under way and was ignored"),
     )
 

@@ -1,31 +1,5 @@
 """Robot arm: the KUKA iiwa moving bottles from a storage pick pose to a belt place pose along preset joint trajectories.
 
-| slot              | type   | dir    | meaning                                                          |
-|-------------------|--------|--------|------------------------------------------------------------------|
-| arm.pick          | void   | target | go above the pick pose, down, grip, back up                      |
-| arm.carry         | void   | target | go above the place pose                                          |
-| arm.place         | void   | target | go above the place pose (if not there), down, release, back up   |
-| arm.home          | void   | target | go to the home pose                                              |
-| arm.picked        | void   | source | a pick sequence ended (see gripper.holding for its outcome)      |
-| arm.carried       | void   | source | a carry ended                                                    |
-| arm.placed        | void   | source | a place sequence ended                                           |
-| arm.homed         | void   | source | the arm reached home                                             |
-| arm.pose          | string | source | home, above_pick or above_place; "" while moving, every step     |
-| arm.busy          | bool   | source | a sequence runs or waits, every step                             |
-| gripper.on_enter  | void   | source | a bottle entered the gripper volume (a volume trigger at the tool) |
-| gripper.on_stay   | void   | source | a bottle was inside at some tick of this step                    |
-| gripper.on_leave  | void   | source | a bottle left the gripper volume                                 |
-| gripper.object    | string | source | id of the bottle that entered last; active with on_enter         |
-| gripper.occupied  | bool   | source | a bottle is inside the gripper volume now, every step            |
-| gripper.grip      | void   | target | grip the bottle in the gripper volume nearest the tool           |
-| gripper.release   | void   | target | release the bottle held                                          |
-| gripper.hold      | bool   | target | true grips, false releases (a level, e.g. a Petri net's Holding) |
-| gripper.holding   | bool   | source | a bottle is held, every step                                     |
-| gripper.held      | string | source | id of the bottle held ("" when none), every step                 |
-| gripper.on_grip   | void   | source | a bottle was gripped                                             |
-| gripper.on_release| void   | source | a bottle was released                                            |
-| gripper.position  | vec3   | source | the tool point, m, every step                                    |
-
 The arm is kinematic, as the paper's skeletal animation: its joints follow straight lines in
 joint space with a quintic time law (starting and stopping at rest), evaluated from the
 integer tick, between poses solved once by inverse kinematics at build time; the engine never
@@ -63,12 +37,12 @@ class Gripper(VolumeTrigger):
     SLOTS = VolumeTrigger.SLOTS + (
         Slot.target("grip", "void", "grip the bottle in the gripper volume nearest the tool"),
         Slot.target("release", "void", "release the bottle held"),
-        Slot.target("hold", "bool", "true grips, false releases"),
-        Slot.source("holding", "bool", "a bottle is held"),
-        Slot.source("held", "string", "id of the bottle held"),
+        Slot.target("hold", "bool", "true grips, false releases (a level, e.g. a Petri net's Holding)"),
+        Slot.source("holding", "bool", "a bottle is held, every step"),
+        Slot.source("held", "string", 'id of the bottle held ("" when none), every step'),
         Slot.source("on_grip", "void", "a bottle was gripped"),
         Slot.source("on_release", "void", "a bottle was released"),
-        Slot.source("position", "vec3", "the tool point, m"),
+        Slot.source("position", "vec3", "the tool point, m, every step"),
     )
 
     STATE = VolumeTrigger.STATE + ("body", "changes", "reported")
@@ -126,14 +100,14 @@ class Arm(Component):
     SLOTS = (
         Slot.target("pick", "void", "go above the pick pose, down, grip, back up"),
         Slot.target("carry", "void", "go above the place pose"),
-        Slot.target("place", "void", "go above the place pose, down, release, back up"),
+        Slot.target("place", "void", "go above the place pose (if not there), down, release, back up"),
         Slot.target("home", "void", "go to the home pose"),
-        Slot.source("picked", "void", "a pick sequence ended"),
+        Slot.source("picked", "void", "a pick sequence ended (see gripper.holding for its outcome)"),
         Slot.source("carried", "void", "a carry ended"),
         Slot.source("placed", "void", "a place sequence ended"),
         Slot.source("homed", "void", "the arm reached home"),
-        Slot.source("pose", "string", "named pose the arm rests in, '' while moving"),
-        Slot.source("busy", "bool", "a sequence runs or waits"),
+        Slot.source("pose", "string", 'home, above_pick or above_place; "" while moving, every step'),
+        Slot.source("busy", "bool", "a sequence runs or waits, every step"),
     )
     COMMANDS = ("pick", "carry", "place", "home")
 

@@ -1,17 +1,5 @@
 """Separator: two gates a bottle's length apart, closed alternately, let one bottle through per cycle (the paper's Fig. 9).
 
-| slot         | type | dir    | meaning                                                            |
-|--------------|------|--------|--------------------------------------------------------------------|
-| bp.open      | void | target | open the downstream gate (the one closed in base position)         |
-| bp.close     | void | target | close it (waits until no bottle is in the way)                     |
-| bp.closed    | bool | target | true closes, false opens                                           |
-| bp.is_closed | bool | source | closed and blocking, every step                                    |
-| bp.is_open   | bool | source | open, every step (both false while it moves)                       |
-| bp.on_closed | void | source | reached closed                                                     |
-| bp.on_opened | void | source | reached open                                                       |
-| bp.blocked   | bool | source | a close waits for a bottle to clear the gate, every step           |
-| wp.…         |      |        | the same slots for the upstream gate (closed in working position)  |
-
 Base position: BP closed, WP open — the queue runs up to BP. Working position: WP closes
 between the first and the second bottle, then BP opens and lets that one bottle go. Back to
 base: BP closes, WP opens, the next bottle moves up. Which gate moves when is the separator's

@@ -1,16 +1,5 @@
 """Sink: takes every bottle that enters its volume out of the plant, counts them by destination and names the misrouted.
 
-| slot              | type   | dir    | meaning                                                     |
-|-------------------|--------|--------|-------------------------------------------------------------|
-| bin.taken         | void   | source | a bottle was taken out in this step                         |
-| bin.object        | string | source | id of the bottle taken last; active with taken              |
-| bin.destination   | string | source | its destination; active with taken                          |
-| bin.misrouted     | void   | source | a bottle for another lane was taken out in this step        |
-| count.total       | int    | source | bottles taken so far, every step                            |
-| count.DEST        | int    | source | bottles with destination DEST taken so far (one per name in `destinations`) |
-| count.other       | int    | source | bottles with any other destination, every step              |
-| count.misrouted   | int    | source | bottles taken whose destination is not in `accepts`, every step |
-
 A bottle is taken out at the first communication point after it entered (it is parked off
 stage, see hub/physics/parking.py, and costs nothing from then on); all bottles that
 entered since the last point are taken, in the order they entered. Destinations come from
@@ -34,7 +23,7 @@ from dataclasses import dataclass
 
 from hub.core.component import Component
 from hub.core.module import Module
-from hub.core.slots import Slot
+from hub.core.slots import Slot, SlotFamily
 from modules.plant import FIGURES, LOOK, ORDERS
 
 from modules.manifest import cargo
@@ -57,10 +46,10 @@ class Delivery:
 
 class Bin(Component):
     SLOTS = (
-        Slot.source("taken", "void", "a bottle was taken out"),
-        Slot.source("object", "string", "id of the bottle taken last"),
-        Slot.source("destination", "string", "its destination"),
-        Slot.source("misrouted", "void", "a bottle for another lane was taken out"),
+        Slot.source("taken", "void", "a bottle was taken out in this step"),
+        Slot.source("object", "string", "id of the bottle taken last; active with taken"),
+        Slot.source("destination", "string", "its destination; active with taken"),
+        Slot.source("misrouted", "void", "a bottle for another lane was taken out in this step"),
     )
     EVENTS_WHEN = ("taken",)   # its rows are the bottles taken at this point
 
@@ -158,16 +147,18 @@ class Sink(Module):
         "additionalProperties": False,
     }
     COMPONENTS = {"bin": Bin, "count": Count}
+    SLOT_FAMILIES = {"count": (SlotFamily.source("DEST", "int", "bottles with destination DEST taken so far (one "
+                                                                "per name in `destinations`)"),)}
     PLANT = True
     TAKES_OUT = True
     CONTRIBUTES = (FIGURES, ORDERS, LOOK)
 
     @staticmethod
     def count_slots(destinations) -> tuple[Slot, ...]:
-        return (Slot.source("total", "int", "bottles taken so far"),
-                *(Slot.source(d, "int", f"bottles for {d!r} taken so far") for d in destinations),
-                Slot.source("other", "int", "bottles for any other destination taken so far"),
-                Slot.source("misrouted", "int", "bottles taken whose destination is not in `accepts`"))
+        return (Slot.source("total", "int", "bottles taken so far, every step"),
+                *(Slot.source(d, "int", f"bottles with destination {d} taken so far") for d in destinations),
+                Slot.source("other", "int", "bottles with any other destination, every step"),
+                Slot.source("misrouted", "int", "bottles taken whose destination is not in `accepts`, every step"))
 
     @classmethod
     def slots(cls, params):

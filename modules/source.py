@@ -1,14 +1,5 @@
 """Source (storage): puts bottles with ids and destinations out at one spot, on command or at a rate.
 
-| slot              | type   | dir    | meaning                                                        |
-|-------------------|--------|--------|----------------------------------------------------------------|
-| store.release     | void   | target | put the next bottle out (it waits while the spot is occupied)  |
-| store.released    | void   | source | a bottle was put out                                           |
-| store.object      | string | source | id of the bottle put out; active with released                 |
-| store.destination | string | source | its destination; active with released                          |
-| store.remaining   | int    | source | bottles still in store, every step                             |
-| store.waiting     | bool   | source | a release waits for the spot to clear, every step              |
-
 The bottles are either listed (`bottles`: ids and destinations) or made by a rule (`count`
 bottles, ids `prefix` + number, destinations drawn with `weights` from the scenario's
 run.seed and the object's name, so every run draws the same and two sources draw apart).
@@ -58,12 +49,12 @@ class Member(BottleBody):
 
 class Store(Component):
     SLOTS = (
-        Slot.target("release", "void", "put the next bottle out"),
+        Slot.target("release", "void", "put the next bottle out (it waits while the spot is occupied)"),
         Slot.source("released", "void", "a bottle was put out"),
-        Slot.source("object", "string", "id of the bottle put out"),
-        Slot.source("destination", "string", "its destination"),
-        Slot.source("remaining", "int", "bottles still in store"),
-        Slot.source("waiting", "bool", "a release waits for the spot to clear"),
+        Slot.source("object", "string", "id of the bottle put out; active with released"),
+        Slot.source("destination", "string", "its destination; active with released"),
+        Slot.source("remaining", "int", "bottles still in store, every step"),
+        Slot.source("waiting", "bool", "a release waits for the spot to clear, every step"),
     )
 
     STATE = ("due", "next", "pending", "out", "blocker")

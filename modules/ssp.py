@@ -1,10 +1,5 @@
 """SSP: a controller delivered as an SSP (System Structure and Parameterization 1.0), its FMUs wired as its SSD says.
 
-| slot              | type           | dir    | meaning                                                     |
-|-------------------|----------------|--------|-------------------------------------------------------------|
-| logic.<input>     | the connector's| target | each input connector of the system, passed to the FMU inputs it is connected to |
-| logic.<output>    | the connector's| source | each output connector of the system, from the FMU output connected to it; active every step |
-
 Slot types by the connector's type (or, where the SSD gives none, the connected FMU variable's):
 Real → real; Integer, Enumeration → int; Boolean → bool; String, Binary → string. An input slot
 starts at the start value of the first FMU input it feeds.
@@ -35,7 +30,7 @@ user never wrote; and errors in the SSP are named at the object's `file:` line e
 from __future__ import annotations
 
 from hub.core.module import Module
-from hub.core.slots import Slot
+from hub.core.slots import Slot, SlotFamily
 from hub.logic.component import LogicComponent
 from hub.core.logic_spec import CO_SIMULATION
 from hub.logic.ssp import SspError, override_problems, read_ssp, start_values
@@ -61,6 +56,11 @@ class Ssp(Module):
         "additionalProperties": False,
     }
     COMPONENTS = {"logic": LogicComponent}
+    SLOT_FAMILIES = {"logic": (
+        SlotFamily.target("<input>", "the connector's", "each input connector of the system, passed to the FMU "
+                                                        "inputs it is connected to"),
+        SlotFamily.source("<output>", "the connector's", "each output connector of the system, from the FMU output "
+                                                         "connected to it; active every step"))}
 
     @classmethod
     def check(cls, params):

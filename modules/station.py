@@ -1,14 +1,5 @@
 """Station (filling, capping): changes the state of a bottle that stands still in it for a set time.
 
-| slot              | type   | dir    | meaning                                                        |
-|-------------------|--------|--------|----------------------------------------------------------------|
-| process.started   | void   | source | a bottle came to rest in the station: processing began         |
-| process.done      | void   | source | processing finished: the bottle is filled (or capped)          |
-| process.aborted   | void   | source | the bottle left before it was done; its state is unchanged     |
-| process.object    | string | source | id of the bottle processed; active with started, done, aborted |
-| process.busy      | bool   | source | a bottle is being processed, every step                        |
-| process.faulty    | void   | source | the bottle done was processed badly (`faults`); with done      |
-
 The station does not hold the bottle: a `stopper` in front of it does, and the plant's logic
 opens it on `done` (see scenarios/station.yaml). A bottle counts as standing while its
 horizontal speed is below `still`; it must stand for `time` seconds (counted in ticks at
@@ -43,12 +34,12 @@ OPERATIONS = {"fill": "filled", "cap": "capped"}
 
 class Process(Component):
     SLOTS = (
-        Slot.source("started", "void", "a bottle came to rest: processing began"),
-        Slot.source("done", "void", "processing finished"),
-        Slot.source("aborted", "void", "the bottle left before it was done"),
-        Slot.source("object", "string", "id of the bottle processed"),
-        Slot.source("busy", "bool", "a bottle is being processed"),
-        Slot.source("faulty", "void", "the bottle done was processed badly"),
+        Slot.source("started", "void", "a bottle came to rest in the station: processing began"),
+        Slot.source("done", "void", "processing finished: the bottle is filled (or capped)"),
+        Slot.source("aborted", "void", "the bottle left before it was done; its state is unchanged"),
+        Slot.source("object", "string", "id of the bottle processed; active with started, done, aborted"),
+        Slot.source("busy", "bool", "a bottle is being processed, every step"),
+        Slot.source("faulty", "void", "the bottle done was processed badly (`faults`); with done"),
     )
 
     STATE = ("body", "since", "finished")

@@ -1,16 +1,5 @@
 """Stopper: one gate across a belt that holds bottles back until it opens (the paper's stopping element).
 
-| slot           | type | dir    | meaning                                                          |
-|----------------|------|--------|------------------------------------------------------------------|
-| gate.open      | void | target | open: let bottles pass                                           |
-| gate.close     | void | target | close: block the belt (waits until no bottle is in the way)      |
-| gate.closed    | bool | target | true closes, false opens                                         |
-| gate.is_closed | bool | source | closed and blocking, every step                                  |
-| gate.is_open   | bool | source | open, every step (both false while it moves)                     |
-| gate.on_closed | void | source | reached closed                                                   |
-| gate.on_opened | void | source | reached open                                                     |
-| gate.blocked   | bool | source | a close waits for a bottle to clear the gate, every step         |
-
 See modules/gate.py for the timing and why a gate never closes onto a bottle.
 """
 from __future__ import annotations

@@ -1,18 +1,5 @@
 """Track switch: a T-junction of a straight main belt and a branch belt, with a blade that diverts bottles into the branch.
 
-| slot              | type | dir    | meaning                                                         |
-|-------------------|------|--------|-----------------------------------------------------------------|
-| blade.to_base     | void | target | move to base position: bottles run straight on                 |
-| blade.to_working  | void | target | move to working position: bottles turn into the branch          |
-| blade.working     | bool | target | true moves to working, false to base (a level instead of events)|
-| blade.in_base     | bool | source | the blade is in base position, every step                       |
-| blade.in_working  | bool | source | the blade is in working position and guides, every step         |
-| blade.on_base     | void | source | reached base position                                           |
-| blade.on_working  | void | source | reached working position                                        |
-| blade.blocked     | bool | source | a move to working waits for a bottle to clear the blade         |
-| main.speed …      |      |        | the main belt's drive: speed, run, running, velocity (see conveyor) |
-| branch.speed …    |      |        | the branch belt's drive, the same slots                         |
-
 The blade is the paper's arcuate rigid body of box shapes (Fig. 7): the outer guard rail of a
 quarter circle from the main belt's centre line into the branch's, starting tangent to the
 main belt's far rail and ending tangent to the branch's downstream rail, its faces a polygon
@@ -49,11 +36,11 @@ SIDES = {"left": 1, "right": -1}
 
 class Blade(TwoPositions):
     SLOTS = (
-        Slot.target("to_base", "void", "move to base position"),
-        Slot.target("to_working", "void", "move to working position"),
-        Slot.target("working", "bool", "true: working position, false: base position"),
-        Slot.source("in_base", "bool", "in base position"),
-        Slot.source("in_working", "bool", "in working position, guiding"),
+        Slot.target("to_base", "void", "move to base position: bottles run straight on"),
+        Slot.target("to_working", "void", "move to working position: bottles turn into the branch"),
+        Slot.target("working", "bool", "true moves to working, false to base (a level instead of events)"),
+        Slot.source("in_base", "bool", "the blade is in base position, every step"),
+        Slot.source("in_working", "bool", "the blade is in working position and guides, every step"),
         Slot.source("on_base", "void", "reached base position"),
         Slot.source("on_working", "void", "reached working position"),
         Slot.source("blocked", "bool", "a move to working waits for a bottle to clear the blade"),

@@ -1,13 +1,5 @@
 """The volume trigger component shared by every sensing module: a box latched over the physics substeps.
 
-| slot             | type   | dir    | meaning                                                       |
-|------------------|--------|--------|---------------------------------------------------------------|
-| trigger.on_enter | void   | source | an object entered the volume in this step                     |
-| trigger.on_stay  | void   | source | an object was inside at some tick of this step                |
-| trigger.on_leave | void   | source | an object left the volume in this step                        |
-| trigger.object   | string | source | id of the object that entered last; active with on_enter      |
-| trigger.occupied | bool   | source | whether an object is inside now, every step                   |
-
 Enter and leave events go to the event log with the exact physics tick and the object's id;
 an object that enters and leaves between two communication points gives both events.
 """
@@ -42,11 +34,11 @@ class VolumeTrigger(Component):
     """The paper's volume trigger; `latch` keeps what the world saw since the last point."""
 
     SLOTS = (
-        Slot.source("on_enter", "void", "an object entered"),
-        Slot.source("on_stay", "void", "an object was inside"),
-        Slot.source("on_leave", "void", "an object left"),
-        Slot.source("object", "string", "id of the object that entered last"),
-        Slot.source("occupied", "bool", "an object is inside now"),
+        Slot.source("on_enter", "void", "an object entered the volume in this step"),
+        Slot.source("on_stay", "void", "an object was inside at some tick of this step"),
+        Slot.source("on_leave", "void", "an object left the volume in this step"),
+        Slot.source("object", "string", "id of the object that entered last; active with on_enter"),
+        Slot.source("occupied", "bool", "whether an object is inside now, every step"),
     )
 
     EVENTS_WHEN = ("on_enter", "on_leave")   # its rows are the latch's entries and exits

@@ -33,19 +33,20 @@ def describe(module_name: str | None) -> int:
         print(f"  {name:<14} {default:<18} {schema.get('description', '')}".rstrip())
         print(f"{_INDENT}form: {form(schema)}")
         if schema.get("type") in ("array", "object"):
-            print(f"{_INDENT}e.g.  {name}: {_flow(example(schema))}")
-    slots = [(comp, slot) for comp, group in module.slots(module.with_defaults({})).items() for slot in group]
+            print(f"{_INDENT}e.g.  {name}: {as_yaml(example(schema))}")
+    slots = module.reference_slots()
     if slots:
         print("\nslots:")
     for comp, slot in slots:
-        print(f"  {comp + '.' + slot.name:<22} {slot.type.value:<7} {slot.direction.value:<7} {slot.doc}")
+        kind = slot.type if isinstance(slot.type, str) else slot.type.value
+        print(f"  {comp + '.' + slot.name:<22} {kind:<7} {slot.direction.value:<7} {slot.doc}")
     return 0
 
 
 def form(schema: dict, plural: bool = False) -> str:
     """What a value of `schema` looks like, in words: `a list of 3 numbers > 0`."""
     if "enum" in schema:
-        values = ", ".join(_flow(v) for v in schema["enum"])
+        values = ", ".join(as_yaml(v) for v in schema["enum"])
         return f"{'each ' if plural else ''}one of {values}"
     kind = schema.get("type")
     if kind == "array":
@@ -128,7 +129,7 @@ def example(schema: dict):
     return "name" if kind == "string" else None
 
 
-def _flow(value) -> str:
+def as_yaml(value) -> str:
     """A value as it is written in a scenario: YAML, on one line."""
     text = yaml.safe_dump(value, default_flow_style=True, sort_keys=False, allow_unicode=True, width=10**6).strip()
     return text.removesuffix("\n...").removesuffix(" ...")

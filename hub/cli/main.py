@@ -95,6 +95,9 @@ def parser() -> tuple[argparse.ArgumentParser, dict]:
     describe_ = command("describe", "list the modules, or one module's parameters (form, example) and slots",
                         "planthub describe source")
     describe_.add_argument("module", nargs="?", help="a module's name (conveyor, source, …); without: list them all")
+    describe_.add_argument("--reference", type=Path, metavar="FILE",
+                           help="write every module's reference (parameters, slots, docstring) as markdown to FILE: "
+                                "modules/README.md is written so")
 
     check_fmu = command("check-fmu", "check an FMU before a run: version, slots, fmpy's validation",
                         "planthub check-fmu my_switch.fmu --like build/fmus/track_switch-fmi2.fmu")
@@ -117,7 +120,7 @@ def parser() -> tuple[argparse.ArgumentParser, dict]:
     add_gateway_arguments(gateway)
 
     handlers = {"run": run_command, "gateway": run_gateway, "validate": _validate, "test": test_command,
-                "describe": lambda args: describe(args.module), "check-fmu": _check_fmu, "report": _report,
+                "describe": _describe, "check-fmu": _check_fmu, "report": _report,
                 **add_bus_commands(sub, parents=loud, formatter=_FORMAT, epilog=TABLE),
                 "view": add_view_command(sub, parents=loud, formatter=_FORMAT, epilog=TABLE),
                 "campaign": add_campaign_command(sub, parents=loud, formatter=_FORMAT, epilog=TABLE),
@@ -150,6 +153,18 @@ def main(argv=None) -> int:
             # Python's own advice: point stdout at /dev/null, so the flush at exit does not fail again.
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
             return OK
+
+
+def _describe(args) -> int:
+    if args.reference is None:
+        return describe(args.module)
+    if args.module:
+        raise UsageError("--reference writes every module's reference: give no module name")
+    from hub.cli.reference import write_reference
+    from hub.core.registry import default_registry
+
+    write_reference(default_registry(), args.reference)
+    return 0
 
 
 def _validate(args) -> int:

@@ -6,7 +6,7 @@ from typing import ClassVar
 
 from hub.core.component import Component
 from hub.core.logic_spec import LogicSpec
-from hub.core.slots import Slot
+from hub.core.slots import Slot, SlotFamily
 
 
 @dataclass
@@ -41,11 +41,28 @@ class Module:
     #: run with the built plant and returns an Observer, a StopCondition, both, or None
     #: (hub/core/observer.py).
     CONTRIBUTES: ClassVar[tuple[str, ...]] = ()
+    #: Slots its parameters name or type, component → families (an FMU's `logic.<input>`, a
+    #: constant's `value.out` of the `type` parameter): its reference lists a family in place of
+    #: the slot of the same name that default parameters give, and the others after their
+    #: component's slots.
+    SLOT_FAMILIES: ClassVar[dict[str, tuple[SlotFamily, ...]]] = {}
 
     @classmethod
     def slots(cls, params: dict) -> dict[str, tuple[Slot, ...]]:
         """Component name → its slots, for checking a scenario without building anything."""
         return {name: comp.SLOTS for name, comp in cls.COMPONENTS.items()}
+
+    @classmethod
+    def reference_slots(cls) -> list[tuple[str, Slot | SlotFamily]]:
+        """(component, slot or family), in the order the module's reference lists them."""
+        slots = dict(cls.slots(cls.with_defaults({})))
+        rows = []
+        for component in {**slots, **cls.SLOT_FAMILIES}:
+            families = {f.name: f for f in cls.SLOT_FAMILIES.get(component, ())}
+            for slot in slots.get(component, ()):
+                rows.append((component, families.pop(slot.name, slot)))
+            rows += [(component, family) for family in families.values()]
+        return rows
 
     @classmethod
     def members(cls, name: str, params: dict) -> dict[str, dict[str, tuple[Slot, ...]]]:

@@ -129,3 +129,24 @@ class SlotRef:
 
     def __str__(self) -> str:
         return f"{self.obj}.{self.component}.{self.slot}"
+
+
+@dataclass(frozen=True)
+class SlotFamily:
+    """Slots a module's parameters name or type (an FMU's inputs, a sink's count per destination),
+    described once for its reference (`planthub describe`, modules/README.md): `name` stands for
+    the names (`<input>`, `DEST`), `type` says where the type comes from ("the input's",
+    "param `type`"). It checks nothing; the slots a scenario gets are `Slot`s."""
+
+    name: str
+    type: str
+    direction: Direction
+    doc: str
+
+    @classmethod
+    def source(cls, name: str, type_: str, doc: str) -> "SlotFamily":
+        return cls(name, type_, Direction.SOURCE, doc)
+
+    @classmethod
+    def target(cls, name: str, type_: str, doc: str) -> "SlotFamily":
+        return cls(name, type_, Direction.TARGET, doc)
