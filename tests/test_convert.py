@@ -240,8 +240,8 @@ def test_a_pulled_output_holds_the_conversion_of_zero_from_the_start(write_scena
 
 
 def test_the_readme_example_runs_as_it_says(stair, tmp_path):
-    """README's "Conversions (`convert`)" example, run on the stair FMU the tests built."""
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    """hub/logic/README.md's "Conversions (`convert`)" example, run on the stair FMU the tests built."""
+    readme = (ROOT / "hub" / "logic" / "README.md").read_text(encoding="utf-8")
     block = readme[readme.index("<!-- example: conversions -->"):]
     block = block[block.index("```yaml\n") + 8:block.index("\n```", block.index("```yaml\n"))]
     assert "file: ../build/foreign/stair.fmu" in block

@@ -197,10 +197,10 @@ def test_a_uint64_output_beyond_an_int_slot_is_named(foreign, write_scenario, tm
 
 
 def test_the_readme_example_runs_as_it_says(foreign, tmp_path):
-    """README's "Bringing your own FMU" example, run on the FMU the tests built."""
+    """hub/logic/README.md's "Bringing your own FMU" example, run on the FMU the tests built."""
     from .helpers import ROOT
 
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    readme = (ROOT / "hub" / "logic" / "README.md").read_text(encoding="utf-8")
     block = readme[readme.index("<!-- example: bringing your own FMU -->"):]
     block = block[block.index("```yaml\n") + 8:block.index("\n```", block.index("```yaml\n"))]
     assert "file: ../build/foreign/typed3.fmu" in block

@@ -1,4 +1,4 @@
-"""The house's layers (README "Layout"): no file under hub/ imports `modules`, no import cycle among
+"""The house's layers (hub/README.md): no file under hub/ imports `modules`, no import cycle among
 hub/'s files, and each subpackage imports only the ones below it.
 
 Every import statement is read with `ast`, including those inside functions (a lazy import is
@@ -14,7 +14,7 @@ from .helpers import ROOT
 
 HUB = ROOT / "hub"
 
-#: subpackage → the subpackages it may import (besides itself). The order of the README's table.
+#: subpackage → the subpackages it may import (besides itself). The order of hub/README.md's table.
 ALLOWED = {
     "core": set(),
     "bus": {"core"},
@@ -77,7 +77,7 @@ def test_the_layers_only_look_down():
     for name, deps in graph().items():
         own = name.split(".")[1] if "." in name else "__init__"
         allowed = ALLOWED.get(own, TOP.get(own))
-        assert allowed is not None, f"{name}: a file of hub/ in no layer; add it to README's layout and ALLOWED"
+        assert allowed is not None, f"{name}: a file of hub/ in no layer; add it to hub/README.md's table and ALLOWED"
         for dep in sorted(deps):
             other = dep.split(".")[1] if "." in dep else "__init__"
             if other != own and other not in allowed:
@@ -123,13 +123,13 @@ def test_the_participant_library_is_light():
 
 
 def test_readme_quotes_the_step_loop_from_the_masters_docstring():
-    """The step loop is written down once, in hub.run.master.Master's docstring; README quotes it."""
+    """The step loop is written down once, in hub.run.master.Master's docstring; hub/run/README.md quotes it."""
     import inspect
 
     from hub.run.master import Master
 
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    readme = (ROOT / "hub" / "run" / "README.md").read_text(encoding="utf-8")
     start = readme.index("<!-- step loop:")
     quoted = readme[readme.index("\n", start) + 1:readme.index("<!-- end: step loop -->")].strip()
     paragraphs = inspect.getdoc(Master).split("\n\n")
-    assert quoted == "\n\n".join(paragraphs[1:5]), "README's step loop differs from Master's docstring"
+    assert quoted == "\n\n".join(paragraphs[1:5]), "hub/run/README.md's step loop differs from Master's docstring"

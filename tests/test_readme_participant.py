@@ -1,4 +1,4 @@
-"""The README's participant example, run exactly as printed: it joins a run from another process and
+"""hub/bus/README.md's participant example, run exactly as printed: it joins a run from another process and
 drives the belt to the in-process FMU's recording, byte for byte."""
 import re
 
@@ -13,9 +13,9 @@ from .helpers import ROOT, run_scenario
 
 
 def readme_example() -> str:
-    text = (ROOT / "README.md").read_text()
+    text = (ROOT / "hub" / "bus" / "README.md").read_text()
     match = re.search(r"<!-- participant example -->\n```python\n(.*?)```", text, re.S)
-    assert match, "README.md lost its participant example"
+    assert match, "hub/bus/README.md lost its participant example"
     return match.group(1)
 
 

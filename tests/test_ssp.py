@@ -309,8 +309,8 @@ def test_the_fmus_are_extracted_to_the_scratch_folder_not_beside_the_scenario(tm
 
 
 def test_the_readme_example_runs(tmp_path):
-    """README's block under "A controller from an SSP", with timer_belt.ssp beside it."""
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    """hub/logic/README.md's block under "A controller from an SSP", with timer_belt.ssp beside it."""
+    readme = (ROOT / "hub" / "logic" / "README.md").read_text(encoding="utf-8")
     block = readme[readme.index("<!-- example: a controller from an SSP -->"):]
     block = block[block.index("```yaml\n") + 8:block.index("\n```", block.index("```yaml\n"))]
     write_ssp(tmp_path / "timer_belt.ssp")
