@@ -1,6 +1,6 @@
 """planthub: a co-simulation hub for automation plants.
 
-`from hub import Simulation` is the Python API (hub/run/simulation.py); README "Layout" says where the rest lives."""
+`from hub import Simulation` is the Python API (hub/run/simulation.py); hub/README.md says where the rest lives."""
 
 
 def __getattr__(name):

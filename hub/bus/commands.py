@@ -291,7 +291,7 @@ class Commands:
 
         A forced slot keeps, aside, what the plant gives it meanwhile — a flow's write to a target,
         a component's emit of a source — and `release` hands that back: the slot then has the value
-        it would have had without the force, not the forced one (hub/bus/commands.py, README).
+        it would have had without the force, not the forced one (hub/bus/README.md).
         Then the faults in effect do what they do to this direction's slots (hub/run/faults.py)."""
         if self._once or self._forced or self._released:
             self._apply(signals, direction)

@@ -107,7 +107,7 @@ _MESSAGES = ["put", "delete", "declare_subscriber", "query", "declare_queryable"
 
 def _configure_access(config, control: tuple[str, ...], watch: tuple[str, ...], tls: TlsSettings) -> None:
     """Zenoh's access control, by certificate common name. A denied message is dropped without a
-    word to its sender; the README says what that looks like."""
+    word to its sender; hub/bus/README.md says what that looks like."""
     controllers = list(dict.fromkeys(control))
     own = tls_common_name(tls.certificate) if tls.certificate else None
     if own:
@@ -136,7 +136,7 @@ class Bus:
 
     A session in peer or router mode with no listen endpoint listens on a free loopback port (tls/
     with a certificate in `settings.tls`), so a plain run reaches nothing beyond this machine;
-    `endpoints` tells where others connect. TLS and access control: hub/bus/tls.py, README.
+    `endpoints` tells where others connect. TLS and access control: hub/bus/tls.py, hub/bus/README.md.
     Gossip and multicast scouting stay off unless `scouting` is on: participants reach the hub
     at its endpoints, never each other.
     """

@@ -12,7 +12,7 @@ string's UTF-8, both ways (cpppo itself takes them for ISO 8859-1 text).
 
 cpppo was chosen as the only maintained pure-Python EtherNet/IP *server* (pycomm3 and pylogix are
 clients); it keeps its tags in module globals, so one gateway per process (as `planthub gateway` is).
-Its answers take a few ms of CPU each (a Python parser per request): see README's costs.
+Its answers take a few ms of CPU each (a Python parser per request): see make bench's gateway section (tests/README.md).
 """
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """An FMU's variables as the hub maps them: FMI type → slot type, ranges, start values, array elements, what a scenario may set.
 
-The rules (README, "Bringing your own FMU"):
+The rules (hub/logic/README.md, "Bringing your own FMU"):
 
 | FMI type                                        | slot   | checked when a value is written          |
 |-------------------------------------------------|--------|------------------------------------------|

@@ -12,7 +12,7 @@ from hub.core import scratch
 
 log = logging.getLogger("planthub.logic")
 
-#: exit status of a hub ended by the watchdog: the run failed (README "Exit codes")
+#: exit status of a hub ended by the watchdog: the run failed (hub/cli/README.md, "Exit codes")
 EXIT_HUNG = 1
 POLL = 0.25   # s between two looks; a hang is noticed within its limit plus this
 

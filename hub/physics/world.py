@@ -85,7 +85,7 @@ class PhysicsWorld:
     # its fixed constraint leans differently between rigid bodies (tests/test_bottle_models.py).
     # SOLVER_ITERATIONS: a free bottle needs few (the solver stops once it converges); a pressed
     # queue gives by 0.5 mm per contact at 50, 1.2 mm at 20, 2.3 mm at 10 (40 bottles), and
-    # costs 1922, 1274 and 1220 µs per tick (README.md, `python -m tests.bench_queue`).
+    # costs 1922, 1274 and 1220 µs per tick (`python -m tests.bench_queue`).
     RING = 0.05
     MAXIMAL = True
     SOLVER_ITERATIONS = 20

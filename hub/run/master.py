@@ -29,8 +29,8 @@ class RunResult:
 
 
 class Master:
-    """Runs the step loop. This docstring is where the loop is written down; README's "The step
-    loop" quotes it word for word (tests/test_layers.py checks), and every other file refers to it.
+    """Runs the step loop. This docstring is where the loop is written down; hub/run/README.md's
+    "The step loop" quotes it word for word (tests/test_layers.py checks), and every other file refers to it.
 
     Time is an integer count of physics ticks (`1/physics_rate` s); seconds are derived only for
     output. One communication step holds `communication_step × physics_rate` ticks. At each

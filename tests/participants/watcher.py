@@ -7,7 +7,7 @@ prints one line `SAMPLES/POINTS ...` for each that watched (samples taken since 
 distinct ticks of those that carry a value: the points it saw); end of input ends them all. Staying alive between turns keeps the start-up of
 twenty processes out of the measured windows. The bench starts this in a session of its own, as
 an operator's HMIs would be: Linux's autogroup scheduling then shares the CPU between the hub's
-session and the watchers' as two groups (README, "Cost").
+session and the watchers' as two groups (`python -m tests.bench_bus`, tests/README.md).
 
 Without N, one watcher: `watch`, `mark` and `stop` on stdin, `watching`, `marked` and
 `SAMPLES POINTS` back.
