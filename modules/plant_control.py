@@ -7,7 +7,15 @@ its branch (MoveToWorkingPos) if the bottle is for that branch's lane, and back 
 their number is the number of reader/switch pairs, and the interface follows from it:
 
     inputs   r<i>_read (void), r<i>_destination (string)     for i = 1 … number of lanes
+             r<i>_occupied (bool)                            with --occupied
     outputs  sw<i>_work (void), sw<i>_base (void)
+
+`--track` (with `--occupied`) also follows each bottle from reader to reader: the destination of
+every bottle read at reader i − 1 and not for its lane is queued for reader i, and when reader
+i sees a bottle arrive (`occupied` rises) without reading it, the head of that queue routes it.
+A reader that reads nothing (a fault: hub/run/faults.py `reader_fault`) then misroutes nothing;
+without `--track` the switch after it keeps whatever position it had (the shipped exercise
+scenarios/exercises/reader_fault.yaml scores the one against the other).
 
 A scenario runs it as its own process on the bus (`python: [modules.plant_control, --lanes, …]`,
 launched by the hub; or joined from anywhere with `python -m modules.plant_control --lanes …
@@ -19,25 +27,45 @@ from hub.participant import Participant, add_options, check_options, serve
 
 
 class PlantControl(Participant):
-    def __init__(self, lanes: list[str]):
+    def __init__(self, lanes: list[str], occupied: bool = False, track: bool = False):
         self.lanes = list(lanes)
         pairs = range(1, len(self.lanes) + 1)
-        self.inputs = {**{f"r{i}_read": "void" for i in pairs}, **{f"r{i}_destination": "string" for i in pairs}}
+        self.inputs = {**{f"r{i}_read": "void" for i in pairs}, **{f"r{i}_destination": "string" for i in pairs},
+                       **({f"r{i}_occupied": "bool" for i in pairs} if occupied else {})}
         self.outputs = {**{f"sw{i}_work": "void" for i in pairs}, **{f"sw{i}_base": "void" for i in pairs}}
         self._pairs = [(f"r{i}_read", f"r{i}_destination", f"sw{i}_work", f"sw{i}_base", lane)
                        for i, lane in zip(pairs, self.lanes)]
+        self.track = track
+        self.queues = [[] for _ in self.lanes]     # destinations on their way to each reader, in order
+        self.seen = [False for _ in self.lanes]    # each reader's `occupied` at the last step
 
     def step(self, t, h):
-        for read, destination, work, base, lane in self._pairs:
+        for i, (read, destination, work, base, lane) in enumerate(self._pairs):
+            arrived = False
+            if self.track:
+                now = getattr(self, f"r{i + 1}_occupied")
+                arrived, self.seen[i] = now and not self.seen[i], now
             if getattr(self, read):
-                ours = getattr(self, destination) == lane
-                setattr(self, work, ours)
-                setattr(self, base, not ours)
+                found = getattr(self, destination)
+                if self.track and self.queues[i]:
+                    self.queues[i].pop(0)   # the bottle the reader before announced: read here itself
+            elif arrived and self.queues[i]:
+                found = self.queues[i].pop(0)   # arrived unread: the reader before said what it is
+            else:
+                continue
+            ours = found == lane
+            setattr(self, work, ours)
+            setattr(self, base, not ours)
+            if self.track and not ours and i + 1 < len(self.queues):
+                self.queues[i + 1].append(found)
 
 
 def _arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--lanes", required=True, type=_lanes,
                         help="comma-separated destination of each switch's branch, in the order of the switches")
+    parser.add_argument("--occupied", action="store_true", help="take each reader's `occupied` (inputs r<i>_occupied)")
+    parser.add_argument("--track", action="store_true",
+                        help="route a bottle a reader did not read by what the reader before read (needs --occupied)")
     return parser
 
 
@@ -50,11 +78,17 @@ def _lanes(text: str) -> list[str]:
 
 def participant(argv: list[str]) -> PlantControl:
     """The logic from its arguments (`--lanes A,B,C`): what `runs: hub` runs."""
-    return PlantControl(_arguments(argparse.ArgumentParser(prog="modules.plant_control")).parse_args(argv).lanes)
+    return _made(_arguments(argparse.ArgumentParser(prog="modules.plant_control")).parse_args(argv))
+
+
+def _made(args) -> PlantControl:
+    if args.track and not args.occupied:
+        raise SystemExit("modules.plant_control: --track follows bottles by the readers' `occupied`: give --occupied")
+    return PlantControl(args.lanes, args.occupied, args.track)
 
 
 if __name__ == "__main__":
     parser = _arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]))
     add_options(parser)
     args = check_options(parser, parser.parse_args())
-    raise SystemExit(serve(PlantControl(args.lanes), args=args))
+    raise SystemExit(serve(_made(args), args=args))

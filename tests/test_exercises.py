@@ -1,0 +1,40 @@
+"""The shipped exercises on the bottling plant: each reference routing logic scores full marks, the
+naive one fails a goal, and the plant stays scenarios/bottling_plant.yaml's."""
+from __future__ import annotations
+
+from xml.etree import ElementTree
+
+from hub.scenario.yamlsource import load_yaml
+
+from .helpers import ROOT, planthub
+
+PLANT = ROOT / "scenarios" / "bottling_plant.yaml"
+READER = ROOT / "scenarios" / "exercise_reader_fault.yaml"
+NAIVE = 'objects.control.python=[modules.plant_control, --lanes, "A,B,C,D,E", --occupied]'
+
+
+def test_the_reader_exercise_is_the_bottling_plant_with_the_readers_occupied_wired_to_control():
+    plant, exercise = load_yaml(PLANT)[0], load_yaml(READER)[0]
+    assert {k: v for k, v in exercise["objects"].items() if k != "control"} == \
+        {k: v for k, v in plant["objects"].items() if k != "control"}
+    added = [f for f in exercise["flows"] if f not in plant["flows"]]
+    assert [f for f in plant["flows"] if f not in exercise["flows"]] == []
+    assert added == [{"from": f"r{i}.trigger.occupied", "to": f"control.logic.r{i}_occupied"} for i in range(1, 6)]
+    assert exercise["defaults"] == plant["defaults"]
+    assert {k: v for k, v in exercise["run"].items() if k != "duration"} == \
+        {k: v for k, v in plant["run"].items() if k not in ("duration", "orders")}
+
+
+def test_tracking_bottles_from_reader_to_reader_scores_full_marks(tmp_path, capsys):
+    code, out, _ = planthub(capsys, "test", READER, "--junit", tmp_path / "ref.xml")
+    assert code == 0, out
+    assert "  ✓ the score — 100 % (5 of 5 points): passed (passes at 100 %)" in out.splitlines()
+    assert ElementTree.parse(tmp_path / "ref.xml").getroot().get("failures") == "0"
+
+
+def test_routing_on_reads_only_misroutes_once_r3_reads_nothing(tmp_path, capsys):
+    code, out, _ = planthub(capsys, "test", READER, "--set", NAIVE)
+    assert code == 1
+    lines = out.splitlines()
+    assert "  ✗ no bottle misrouted — 1 misrouted: M012 (for C) at sink_F" in lines
+    assert "  ✗ the score — 40 % (2 of 5 points): failed (passes at 100 %)" in lines
