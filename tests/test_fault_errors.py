@@ -57,7 +57,7 @@ def test_every_bad_fault_and_goal_is_named_at_its_line(write_scenario):
     assert problems(path) == [
         f"{path}:33: exercise.goals[4].score: unknown key 'score' (known: delivered, longest_jam, misrouted, name, points, recover_within, throughput)",
         f'{path}:23: faults[14].for: -1 is less than or equal to the minimum of 0',
-        f"{path}:23: faults[14].kind: 'melt' is not one of ['sensor_stuck', 'belt_failure', 'part_stuck', 'reader_fault', 'logic_dead']",
+        f"{path}:23: faults[14].kind: 'melt' is not one of ['sensor_stuck', 'belt_failure', 'part_stuck', 'reader_fault', 'logic_dead', 'bottle_tipped']",
         f'{path}:24: faults[15].speed: 1.5 is greater than or equal to the maximum of 1',
         f"{path}:9: faults[0].target: unknown object 'sww' (did you mean 'sw'?)",
         f"{path}:10: faults[1].target: 'sw' has several: name one (sw.main, sw.branch)",
@@ -103,7 +103,7 @@ def test_a_fault_given_with_set_is_blamed_on_set():
 
 @pytest.mark.parametrize("value, message", [
     ('{"name": "x", "kind": "melt"}', "fault: kind must be one of sensor_stuck, belt_failure, part_stuck, "
-                                      "reader_fault, logic_dead, got melt"),
+                                      "reader_fault, logic_dead, bottle_tipped, got melt"),
     ('{"kind": "part_stuck"}', "fault: its value is a map with the fault's `name`"),
     ('{"name": "x", "kind": "belt_failure", "speed": 2}', "fault x: `speed` cannot be 2"),
     ('{"name": "x", "kind": "sensor_stuck"}', "fault x: sensor_stuck needs `value`"),

@@ -93,6 +93,18 @@ def test_dead_switch_logic_never_moves_the_blade():
     assert (sim["main_end.count.total"], sim["branch_end.count.total"]) == (2, 0)
 
 
+def test_a_bottle_tipped_at_the_reader_lies_on_its_side_and_rides_on():
+    """B (radius 3 cm, 9.6 cm tall) is laid along the belt as it enters the reader: its centre 3 cm
+    over the belt instead of 4.8; lying, it still turns into the branch and is delivered."""
+    tipped = [{"kind": "bottle_tipped", "target": "reader", "after": {"event": "reader.trigger.on_enter"}}]
+    with Simulation(SWITCH, {"faults": tipped}) as sim:
+        sim.run(1.0)
+        assert sim["b.body.position"][2] == pytest.approx(0.03, abs=0.002)
+        assert sim["a.body.position"][2] == pytest.approx(0.048, abs=0.002)
+        sim.run()
+        assert (sim["main_end.count.total"], sim["branch_end.count.total"]) == (1, 1)
+
+
 def test_a_time_drawn_from_the_seed_lies_in_its_window_on_a_point_and_follows_the_seed():
     fault = [{"kind": "part_stuck", "target": "sw", "between": [1.0, 3.0]}]
     starts = {seed: load_scenario(SWITCH, {"faults": fault, "run.seed": seed}).faults[0].start for seed in range(6)}
@@ -111,14 +123,16 @@ def test_a_replay_of_a_faulted_run_gives_the_same_files_bit_for_bit(tmp_path):
               {"name": "slow", "kind": "belt_failure", "target": "sw.main", "speed": 0.3, "between": [0.5, 2.0],
                "for": 0.5},
               {"name": "misread", "kind": "reader_fault", "target": "reader", "reads": "wrong", "destination": "Q",
-               "at": 0.2}]
+               "at": 0.2},
+              {"name": "tipped", "kind": "bottle_tipped", "target": "reader", "at": 0.6}]
     record = ["a.body.position", "b.body.position", "sw.blade.in_working", "reader.trigger.destination",
               "main_end.count.total", "branch_end.count.total"]
     first, again = tmp_path / "first", tmp_path / "again"
     run_scenario(SWITCH, first, {"faults": faults, "record": record})
     rows = list(csv.DictReader(open(first / "commands.csv")))
     assert sorted((r["op"], r["slot"], r["by"]) for r in rows) == [
-        ("fault", "reader.trigger", "scenario"), ("fault", "sw.blade", "scenario"), ("fault", "sw.main", "scenario"),
+        ("fault", "reader.trigger", "scenario"), ("fault", "reader.trigger", "scenario"),
+        ("fault", "sw.blade", "scenario"), ("fault", "sw.main", "scenario"),
         ("repair", "sw.blade", "scenario"), ("repair", "sw.main", "scenario")]
     # The replay schedules nothing itself: its recorded commands start and end the faults.
     run_scenario(SWITCH, again, {"faults": faults, "record": record}, replay=first)

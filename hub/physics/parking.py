@@ -1,6 +1,8 @@
 """Parked bodies: bottles out of play (in a source's store, taken out by a sink) wait off stage, asleep, unread."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from hub.physics._quiet import quiet_stderr
@@ -54,6 +56,29 @@ class Parking:
             upright = boxes(np.array([(0.0, 0.0, 0.0, 1.0)]), self.bodies.radii[[body]], half_heights[[body]])
             self.sleep.wake_in([centre], upright)
         self.bodies.moved()
+
+    def lay(self, body: int, heading: float) -> None:
+        """Lay a body in play on its side where it stands, its axis along `heading` (rad, in the
+        plane), at rest (a tipped bottle: hub/run/faults.py). Like `unpark`, a reset the engine sees
+        the same way in every run that makes it at the same tick."""
+        call, bodies = self.engine.call, self.bodies
+        x, y, z = bodies.positions[body].tolist()
+        floor = z - float(bodies.half_heights[body])   # where it stands (upright, as a bottle in play does)
+        centre = (x, y, floor + float(bodies.radii[body]))
+        c, s = math.cos(heading), math.sin(heading)
+        half = math.sqrt(0.5)   # a quarter turn about the horizontal axis across the heading
+        turn = (-s * half, c * half, 0.0, half)
+        for b, offset in self.bottles.parts(body):
+            part = (centre[0] + c * offset, centre[1] + s * offset, centre[2])
+            call(pybullet.resetBasePositionAndOrientation, b, part, turn)
+            call(pybullet.resetBaseVelocity, b, (0, 0, 0), (0, 0, 0))
+            self.engine.rejoin(b)
+        self.rest.forget(body)
+        bodies.placed[body] = centre
+        if self.rest.resting.any():
+            lying = boxes(np.array([turn]), bodies.radii[[body]], bodies.half_heights[[body]])
+            self.sleep.wake_in([centre], lying)
+        bodies.moved()
 
     def is_parked(self, body: int) -> bool:
         return body in self.bodies.parked

@@ -273,6 +273,11 @@ class PhysicsWorld:
     def is_parked(self, body: int) -> bool:
         return body in self.bodies.parked
 
+    def tip(self, body: int, heading: float) -> None:
+        """Lay a bottle in play on its side where it stands, its axis along `heading` (rad): a fault."""
+        self.transport.release([body])
+        self.parking.lay(body, heading)
+
     def add_arm(self, base, yaw: float, tool_length: float) -> KinematicArm:
         arm = self.robots.add(base, yaw, tool_length)
         self.scene.arm(len(self.robots.arms) - 1, URDF, base, yaw, arm.joint_names, tool_length)

@@ -20,6 +20,10 @@ targets fit):
 - `reader_fault` — `reads: nothing`: the reader's entry (`on_enter`, `object`, `destination`,
   `filled`, `capped`) does not go out; `reads: wrong`: each entry goes out with the given
   `destination` and `id`.
+- `bottle_tipped` — the bottle in the sensor's volume when the fault begins (the one that
+  entered last), or else the next to enter it, is laid on its side where it stands, its axis
+  along the way it moves (hub/physics/parking.py `lay`): a real obstacle the physics has to deal
+  with (it jams at a switch's blade, a curve, a gate). Once: its end changes nothing.
 - `logic_dead` — nothing of the logic component's outputs goes out (no events, values frozen
   at what they were at the start). The logic itself still steps (a participant's process is not
   killed: that would end a run by its lease, at no tick a replay could reproduce); when the
@@ -30,6 +34,7 @@ forces (hub/run/master.py, steps 1 and 2).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from hub.bus.commands import MAX_NAME, Command, CommandError
@@ -257,8 +262,27 @@ class _LogicDead(_Effect):
             active[i] = False
 
 
+class _BottleTipped(_Effect):
+    def begin(self):
+        self.armed, self.first = True, True
+
+    def apply(self, signals, direction):
+        if direction is not Direction.SOURCE or not self.armed:
+            return
+        # What the sensor saw, not what its slots say (another fault may make them lie).
+        latch, world = self.owner.latch, self.book.plant.world
+        found = latch.entered[-1][1] if latch.entered else latch.inside[-1] if self.first and latch.inside else None
+        self.first = False
+        if found is None:
+            return
+        self.armed = False
+        body = int(found)
+        vx, vy = world.velocities[body][:2].tolist()
+        world.tip(body, math.atan2(vy, vx) if vx * vx + vy * vy > 1e-6 else 0.0)
+
+
 _EFFECTS = {"sensor_stuck": _SensorStuck, "belt_failure": _BeltFailure, "part_stuck": _PartStuck,
-            "reader_fault": _ReaderFault, "logic_dead": _LogicDead}
+            "reader_fault": _ReaderFault, "logic_dead": _LogicDead, "bottle_tipped": _BottleTipped}
 
 
 class FaultSchedule:

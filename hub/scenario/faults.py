@@ -13,6 +13,7 @@ A start or end falls on the first communication point at or after it. Kinds and 
 | `part_stuck`    | a switch's blade, a gate, a stopper       | — (the part stays where it is and ignores commands) |
 | `reader_fault`  | an ID reader                             | `reads: nothing`, or `reads: wrong` with `destination` (and `id`, default "?") |
 | `logic_dead`    | an object's `logic` (FMU, participant)    | — (its outputs stop reaching the plant: no events, values frozen) |
+| `bottle_tipped` | a light barrier or ID reader: the place   | — (the bottle in its volume at the start, or else the next to enter, is laid on its side there) |
 
 What a kind does to the slots is hub/run/faults.py's; a fault becomes an operator command
 (`fault`, `repair`: hub/bus/commands.py) at its point, so it is in events.csv and commands.csv
@@ -26,7 +27,7 @@ from dataclasses import dataclass
 from hub.core.registry import did_you_mean
 from hub.core.slots import Direction, SlotType
 
-KINDS = ("sensor_stuck", "belt_failure", "part_stuck", "reader_fault", "logic_dead")
+KINDS = ("sensor_stuck", "belt_failure", "part_stuck", "reader_fault", "logic_dead", "bottle_tipped")
 
 #: kind → (required parameters, optional parameters)
 PARAMETERS = {
@@ -35,6 +36,7 @@ PARAMETERS = {
     "part_stuck": ((), ()),
     "reader_fault": (("reads",), ("destination", "id")),
     "logic_dead": ((), ()),
+    "bottle_tipped": ((), ()),
 }
 
 #: kind → what a fitting component is, said in an error
@@ -44,6 +46,7 @@ WHAT = {
     "part_stuck": "a part with two positions (a switch blade, a gate, a stopper: blocked)",
     "reader_fault": "an ID reader (on_enter and destination)",
     "logic_dead": "state logic (a `logic` component: an FMU or a participant)",
+    "bottle_tipped": "a sensor that names what enters it (on_enter and object)",
 }
 
 
@@ -65,6 +68,9 @@ def fits(kind: str, component: str, slots: dict[str, object]) -> bool:
         return source("blocked", SlotType.BOOL) and any(s.direction is Direction.TARGET for s in slots.values())
     if kind == "reader_fault":
         return source("on_enter", SlotType.VOID) and source("destination", SlotType.STRING)
+    if kind == "bottle_tipped":
+        return source("on_enter", SlotType.VOID) and source("object", SlotType.STRING) and \
+            source("occupied", SlotType.BOOL)
     return component == "logic"
 
 
