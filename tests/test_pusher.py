@@ -111,4 +111,4 @@ def test_describe_shows_the_pushers_slots():
     assert proc.returncode == 0, proc.stderr
     for slot in ("push.push", "push.busy", "push.extended", "push.on_extended", "push.on_returned",
                  "push.refused", "main.speed", "lane.speed"):
-        assert f"| {slot}" in proc.stdout
+        assert f"\n  {slot} " in proc.stdout
