@@ -138,11 +138,29 @@ def start_pose(name: str, params: dict, world) -> Pose:
 
 def build_segment(name: str, params: dict, world, line: Straight | Arc) -> dict[str, Component]:
     """Floor, guard rails, force field and end anchor of one belt segment along `line`."""
+    drive = build_belt(name, "drive", params, world, line)
+    world.anchors[name] = line.end
+    return {"drive": drive}
+
+
+#: Both rails of a straight belt, unbroken: (side, its openings), left (+1) first.
+UNBROKEN = ((1, ()), (-1, ()))
+
+
+def build_belt(name: str, component: str, params: dict, world, line: Straight | Arc,
+               rails=UNBROKEN) -> BeltDrive:
+    """The floor, guard rails and force field of one belt along `line` (its `width`, `rail_height`,
+    `field_height`, `speed`, `running`, `k` or `gain`, `grip`, `friction` from `params`), and
+    its drive, component `component` of object `name`. A straight belt's `rails` are (side,
+    openings) in the order they are built, side +1 left and −1 right of the line and openings
+    (from, to) along it where the rail leaves room for a branch, a lane or a pusher's plate; an
+    arc's rails are unbroken. The order of the bodies is the order of the engine's calls, which
+    its results depend on."""
     z, half = line.start.z, params["width"] / 2.0
     world.add_support(z, line.footprint(half + RAIL_THICKNESS), SUPPORT_THICKNESS)
     height = params["rail_height"]
     if isinstance(line, Straight):
-        for centre, half_extents, yaw in straight_rails(line, half, height):
+        for centre, half_extents, yaw in straight_rails(line, half, height, rails):
             world.add_static_box(centre, half_extents, yaw)
     else:
         for side in (1, -1):
@@ -156,19 +174,23 @@ def build_segment(name: str, params: dict, world, line: Straight | Arc) -> dict[
     # and a bottle gripped at its base must still be found inside.
     field = world.add_belt_field(line, half, z - SUPPORT_THICKNESS, z + params["field_height"], rate,
                                  speed if running else 0.0, params["grip"], per_mass, params.get("friction"))
-    world.anchors[name] = line.end
-    return {"drive": BeltDrive(name, "drive", world, field, speed, running)}
+    return BeltDrive(name, component, world, field, speed, running)
 
 
-def straight_rails(line: Straight, half_width: float, height: float):
-    """(centre, half extents, yaw) of the two rail boxes, inner faces at ±half_width."""
-    s = line.pose_at(line.length / 2)
-    lx, ly = s.left
+def straight_rails(line: Straight, half_width: float, height: float, rails=UNBROKEN):
+    """(centre, half extents, yaw) of the rail boxes, inner faces at ±half_width: per side of
+    `rails`, one box for each stretch between its openings."""
+    lx, ly = line.start.left
     out = []
-    for side in (1, -1):
+    for side, openings in rails:
         offset = side * (half_width + RAIL_THICKNESS / 2)
-        out.append(((s.x + lx * offset, s.y + ly * offset, s.z + height / 2),
-                    (line.length / 2, RAIL_THICKNESS / 2, height / 2), s.yaw))
+        ends = [0.0, *(u for opening in openings for u in opening), line.length]
+        for u0, u1 in zip(ends[::2], ends[1::2]):
+            if u1 - u0 <= 1e-9:
+                continue
+            mid = line.pose_at((u0 + u1) / 2)
+            out.append(((mid.x + lx * offset, mid.y + ly * offset, mid.z + height / 2),
+                        ((u1 - u0) / 2, RAIL_THICKNESS / 2, height / 2), line.start.yaw))
     return out
 
 

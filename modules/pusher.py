@@ -34,8 +34,7 @@ from hub.core.slots import Slot
 from hub.physics.frames import Pose, Straight
 from hub.physics.moving import Leg
 
-from modules.belt import COMMON, K_DEFAULT, PLACEMENT, RAIL_THICKNESS, SUPPORT_THICKNESS, BeltDrive, build_segment, \
-    check_placement, start_pose
+from modules.belt import COMMON, PLACEMENT, RAIL_THICKNESS, BeltDrive, build_belt, check_placement, start_pose
 from modules.params import length
 
 SIDES = {"left": 1, "right": -1}
@@ -142,13 +141,15 @@ class Pusher(Module):
         line = Straight(start_pose(name, params, world), params["length"])
         s, half, at = SIDES[params["side"]], params["width"] / 2, params["at"]
         mouth, plate = params["lane_width"], params["plate_length"]
-        main = cls.build_belt(name, params, world, line, s, at, mouth / 2, plate / 2)
+        # The rail on the lane's side is open over the lane's mouth, the other over the plate.
+        main = build_belt(name, "main", params, world, line,
+                          ((s, [(at - mouth / 2, at + mouth / 2)]), (-s, [(at - plate / 2, at + plate / 2)])))
         fork = line.pose_at(at)
         lx, ly = fork.left
         lane_start = Pose(fork.x + s * lx * (half + RAIL_THICKNESS), fork.y + s * ly * (half + RAIL_THICKNESS),
                           fork.z, fork.yaw + s * math.pi / 2)
         lane_params = {**params, "width": mouth, "speed": params.get("lane_speed", params["speed"])}
-        lane = build_segment(name, lane_params, world, Straight(lane_start, params["lane_length"]))["drive"]
+        lane = build_belt(name, "lane", lane_params, world, Straight(lane_start, params["lane_length"]))
         world.anchors[name] = line.end
         # The plate stands in the near rail's opening, its face flush with the rail's inner face,
         # and slides towards the lane.
@@ -160,26 +161,4 @@ class Pusher(Module):
         stroke = params.get("stroke", params["width"] + RAIL_THICKNESS)
         out = params["push_speed"]
         legs = (Leg(stroke, out, params["dwell"]), Leg(0.0, params.get("return_speed", out)))
-        return {"push": Push(name, "push", world, part, legs, stroke), "main": main,
-                "lane": BeltDrive(name, "lane", world, lane.field, lane.speed, lane.running)}
-
-    @staticmethod
-    def build_belt(name, params, world, line: Straight, s: int, at: float, mouth: float, plate: float) -> BeltDrive:
-        """Floor, field and rails of the belt: the rail on the lane's side open over the lane's
-        mouth, the other over the plate."""
-        z, half, height = line.start.z, params["width"] / 2, params["rail_height"]
-        world.add_support(z, line.footprint(half + RAIL_THICKNESS), SUPPORT_THICKNESS)
-        lx, ly = line.start.left
-        for side, gap in ((s, mouth), (-s, plate)):
-            offset = side * (half + RAIL_THICKNESS / 2)
-            for u0, u1 in ((0.0, at - gap), (at + gap, line.length)):
-                if u1 - u0 <= 1e-9:
-                    continue
-                mid = line.pose_at((u0 + u1) / 2)
-                world.add_static_box((mid.x + lx * offset, mid.y + ly * offset, z + height / 2),
-                                     ((u1 - u0) / 2, RAIL_THICKNESS / 2, height / 2), line.start.yaw)
-        rate, per_mass = (params["gain"], False) if "gain" in params else (params.get("k", K_DEFAULT), True)
-        speed, running = params["speed"], params["running"]
-        field = world.add_belt_field(line, half, z - SUPPORT_THICKNESS, z + params["field_height"], rate,
-                                     speed if running else 0.0, params["grip"], per_mass, params.get("friction"))
-        return BeltDrive(name, "main", world, field, speed, running)
+        return {"push": Push(name, "push", world, part, legs, stroke), "main": main, "lane": lane}

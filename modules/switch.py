@@ -26,8 +26,7 @@ from hub.core.module import Module
 from hub.physics.frames import Arc, Pose, Straight
 from hub.core.slots import Slot
 
-from modules.belt import (COMMON, K_DEFAULT, PLACEMENT, RAIL_THICKNESS, SUPPORT_THICKNESS, BeltDrive, arc_rail,
-                   build_segment, check_placement, start_pose)
+from modules.belt import COMMON, PLACEMENT, RAIL_THICKNESS, BeltDrive, arc_rail, build_belt, check_placement, start_pose
 from modules.gate import Blocker, TwoPositions
 from modules.params import length
 
@@ -108,8 +107,9 @@ class Switch(Module):
         branch_start = Pose(fork.x + s * lx * (half + RAIL_THICKNESS), fork.y + s * ly * (half + RAIL_THICKNESS),
                             fork.z, fork.yaw + s * math.pi / 2)
         branch_params = {**params, "speed": params.get("branch_speed", params["speed"])}
-        branch = build_segment(name, branch_params, world, Straight(branch_start, params["branch_length"]))["drive"]
-        drive = cls.build_main(name, params, world, main, s, a)
+        branch = build_belt(name, "branch", branch_params, world, Straight(branch_start, params["branch_length"]))
+        # The main belt's rail on the branch side is open over the branch's width.
+        drive = build_belt(name, "main", params, world, main, ((-s, ()), (s, [(a - half, a + half)])))
         world.anchors[name] = main.end
         # The blade: outer rail of a quarter circle of radius half + rail from the main centre
         # line into the branch's, so its ends meet the far rail and the downstream branch rail.
@@ -117,25 +117,4 @@ class Switch(Module):
         arc = Arc(main.pose_at(a - turn), turn, math.pi / 2, s)
         centres, halves, yaws = arc_rail(arc, -s, half, params["blade_height"], params["blade_tolerance"])
         blocker = Blocker(world, centres, halves, yaws, params["working"], round(params["travel_time"] * world.rate))
-        return {"blade": Blade(name, "blade", blocker), "main": drive,
-                "branch": BeltDrive(name, "branch", world, branch.field, branch.speed, branch.running)}
-
-    @staticmethod
-    def build_main(name, params, world, line: Straight, s: int, a: float) -> BeltDrive:
-        """Floor, field and rails of the main belt, its rail on the branch side open over the branch's width."""
-        z, half, height = line.start.z, params["width"] / 2, params["rail_height"]
-        world.add_support(z, line.footprint(half + RAIL_THICKNESS), SUPPORT_THICKNESS)
-        lx, ly = line.start.left
-        for side, pieces in ((-s, [(0.0, line.length)]), (s, [(0.0, a - half), (a + half, line.length)])):
-            offset = side * (half + RAIL_THICKNESS / 2)
-            for u0, u1 in pieces:
-                if u1 - u0 <= 1e-9:
-                    continue
-                mid = line.pose_at((u0 + u1) / 2)
-                world.add_static_box((mid.x + lx * offset, mid.y + ly * offset, z + height / 2),
-                                     ((u1 - u0) / 2, RAIL_THICKNESS / 2, height / 2), line.start.yaw)
-        rate, per_mass = (params["gain"], False) if "gain" in params else (params.get("k", K_DEFAULT), True)
-        speed, running = params["speed"], params["running"]
-        field = world.add_belt_field(line, half, z - SUPPORT_THICKNESS, z + params["field_height"], rate,
-                                     speed if running else 0.0, params["grip"], per_mass, params.get("friction"))
-        return BeltDrive(name, "main", world, field, speed, running)
+        return {"blade": Blade(name, "blade", blocker), "main": drive, "branch": branch}
