@@ -76,9 +76,9 @@ class Fmu(Module):
                        "description": "with runs: bus — true (default): the hub starts `planthub serve-fmu`; "
                                       "false: one started elsewhere joins"},
             "step_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
-                             "description": "s one step may take: past it an isolated FMU's worker is killed and an "
-                                            "FMU in the hub ends the hub (a C call cannot be interrupted); either way "
-                                            "the run stops naming it, with its files complete"},
+                             "description": "s one step may take: past it the worker of an FMU in a child process "
+                                            "is killed and an FMU in the hub ends the hub (a C call cannot be "
+                                            "interrupted); either way the run stops naming it, with its files complete"},
             "on_bad_value": {"enum": ["stop", "hold"], "default": "stop",
                              "description": "a non-finite real from the logic: stop the run, or hold the last good value (logged)"},
             "join_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
