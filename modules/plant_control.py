@@ -8,14 +8,24 @@ their number is the number of reader/switch pairs, and the interface follows fro
 
     inputs   r<i>_read (void), r<i>_destination (string)     for i = 1 … number of lanes
              r<i>_occupied (bool)                            with --occupied
+             b327 (void)                                     with --separator
     outputs  sw<i>_work (void), sw<i>_base (void)
+             sep_b327 (void)                                 with --separator
 
 `--track` (with `--occupied`) also follows each bottle from reader to reader: the destination of
 every bottle read at reader i − 1 and not for its lane is queued for reader i, and when reader
 i sees a bottle arrive (`occupied` rises) without reading it, the head of that queue routes it.
 A reader that reads nothing (a fault: hub/run/faults.py `reader_fault`) then misroutes nothing;
 without `--track` the switch after it keeps whatever position it had (the shipped exercise
-scenarios/exercises/reader_fault.yaml scores the one against the other).
+scenarios/exercise_reader_fault.yaml scores the one against the other).
+
+`--separator` puts the management between the sensor B327 behind the separator and the
+separator's logic: `b327` (its on_stay) is passed on as `sep_b327`. With `--stuck-after S` it
+watches the sensor: seen at every step for longer than S (no bottle takes that long to leave
+the section behind the separator, which lets one in at a time), it is taken as stuck and no
+longer passed on, until it is clear for a step; the separator then relies on B321 and its
+rearm delay. Without, a sensor stuck on holds the separator shut for good
+(scenarios/exercise_separator_sensor.yaml).
 
 A scenario runs it as its own process on the bus (`python: [modules.plant_control, --lanes, …]`,
 launched by the hub; or joined from anywhere with `python -m modules.plant_control --lanes …
@@ -27,12 +37,17 @@ from hub.participant import Participant, add_options, check_options, serve
 
 
 class PlantControl(Participant):
-    def __init__(self, lanes: list[str], occupied: bool = False, track: bool = False):
+    def __init__(self, lanes: list[str], occupied: bool = False, track: bool = False, separator: bool = False,
+                 stuck_after: float | None = None):
         self.lanes = list(lanes)
         pairs = range(1, len(self.lanes) + 1)
         self.inputs = {**{f"r{i}_read": "void" for i in pairs}, **{f"r{i}_destination": "string" for i in pairs},
                        **({f"r{i}_occupied": "bool" for i in pairs} if occupied else {})}
         self.outputs = {**{f"sw{i}_work": "void" for i in pairs}, **{f"sw{i}_base": "void" for i in pairs}}
+        if separator:
+            self.inputs["b327"], self.outputs["sep_b327"] = "void", "void"
+        self.separator, self.stuck_after = separator, stuck_after
+        self.b327_since = None   # the time B327 has been seen at every step from; None: clear at the last
         self._pairs = [(f"r{i}_read", f"r{i}_destination", f"sw{i}_work", f"sw{i}_base", lane)
                        for i, lane in zip(pairs, self.lanes)]
         self.track = track
@@ -40,6 +55,8 @@ class PlantControl(Participant):
         self.seen = [False for _ in self.lanes]    # each reader's `occupied` at the last step
 
     def step(self, t, h):
+        if self.separator:
+            self._watch(t)
         for i, (read, destination, work, base, lane) in enumerate(self._pairs):
             arrived = False
             if self.track:
@@ -60,12 +77,28 @@ class PlantControl(Participant):
                 self.queues[i + 1].append(found)
 
 
+    def _watch(self, t):
+        """Pass B327 on to the separator, unless it has been on for longer than stuck_after."""
+        if not self.b327:
+            self.b327_since = None
+            self.sep_b327 = False
+            return
+        if self.b327_since is None:
+            self.b327_since = t
+        stuck = self.stuck_after is not None and t - self.b327_since > self.stuck_after
+        self.sep_b327 = not stuck
+
+
 def _arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--lanes", required=True, type=_lanes,
                         help="comma-separated destination of each switch's branch, in the order of the switches")
     parser.add_argument("--occupied", action="store_true", help="take each reader's `occupied` (inputs r<i>_occupied)")
     parser.add_argument("--track", action="store_true",
                         help="route a bottle a reader did not read by what the reader before read (needs --occupied)")
+    parser.add_argument("--separator", action="store_true",
+                        help="pass the sensor B327 on to the separator's logic (input b327, output sep_b327)")
+    parser.add_argument("--stuck-after", type=float, metavar="S",
+                        help="with --separator: take B327 as stuck once seen for longer than S seconds on end")
     return parser
 
 
@@ -84,7 +117,9 @@ def participant(argv: list[str]) -> PlantControl:
 def _made(args) -> PlantControl:
     if args.track and not args.occupied:
         raise SystemExit("modules.plant_control: --track follows bottles by the readers' `occupied`: give --occupied")
-    return PlantControl(args.lanes, args.occupied, args.track)
+    if args.stuck_after is not None and not args.separator:
+        raise SystemExit("modules.plant_control: --stuck-after watches the separator's sensor: give --separator")
+    return PlantControl(args.lanes, args.occupied, args.track, args.separator, args.stuck_after)
 
 
 if __name__ == "__main__":

@@ -10,7 +10,9 @@ from .helpers import ROOT, planthub
 
 PLANT = ROOT / "scenarios" / "bottling_plant.yaml"
 READER = ROOT / "scenarios" / "exercise_reader_fault.yaml"
+SEPARATOR = ROOT / "scenarios" / "exercise_separator_sensor.yaml"
 NAIVE = 'objects.control.python=[modules.plant_control, --lanes, "A,B,C,D,E", --occupied]'
+NAIVE_SEPARATOR = 'objects.control.python=[modules.plant_control, --lanes, "A,B,C,D,E", --separator]'
 
 
 def test_the_reader_exercise_is_the_bottling_plant_with_the_readers_occupied_wired_to_control():
@@ -38,3 +40,33 @@ def test_routing_on_reads_only_misroutes_once_r3_reads_nothing(tmp_path, capsys)
     lines = out.splitlines()
     assert "  ✗ no bottle misrouted — 1 misrouted: M012 (for C) at sink_F" in lines
     assert "  ✗ the score — 40 % (2 of 5 points): failed (passes at 100 %)" in lines
+
+
+def test_the_separator_exercise_is_the_bottling_plant_with_b327_passed_through_control():
+    plant, exercise = load_yaml(PLANT)[0], load_yaml(SEPARATOR)[0]
+    assert {k: v for k, v in exercise["objects"].items() if k != "control"} == \
+        {k: v for k, v in plant["objects"].items() if k != "control"}
+    assert [f for f in plant["flows"] if f not in exercise["flows"]] == [
+        {"from": "B327.trigger.on_stay", "to": "sep.logic.B327_put"}]
+    assert [f for f in exercise["flows"] if f not in plant["flows"]] == [
+        {"from": "B327.trigger.on_stay", "to": "control.logic.b327"},
+        {"from": "control.logic.sep_b327", "to": "sep.logic.B327_put"}]
+    assert exercise["defaults"] == plant["defaults"]
+    assert {k: v for k, v in exercise["run"].items() if k not in ("duration", "watch")} == \
+        {k: v for k, v in plant["run"].items() if k not in ("duration", "orders")}
+
+
+def test_a_stuck_sensor_taken_as_stuck_keeps_the_separator_going(capsys):
+    """B327 sticks on at 47.96 s (drawn from seed 0 in [38, 48] s)."""
+    code, out, _ = planthub(capsys, "test", SEPARATOR)
+    assert code == 0, out
+    assert "  ✓ the score — 100 % (5 of 5 points): passed (passes at 100 %)" in out.splitlines()
+
+
+def test_a_stuck_sensor_passed_on_holds_the_separator_shut(capsys):
+    code, out, _ = planthub(capsys, "test", SEPARATOR, "--set", NAIVE_SEPARATOR)
+    assert code == 1
+    lines = out.splitlines()
+    assert "  ✗ never 10 s without a delivery after a fault — B327 stuck on: at most 16.12 s without a delivery " \
+           "(from 73.880 s to the end)" in lines
+    assert "  ✗ at least 28 bottles delivered — 21 delivered" in lines
