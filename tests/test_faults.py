@@ -13,6 +13,8 @@ import pytest
 from hub.run.simulation import Simulation
 from hub.scenario.checker import load_scenario
 
+from hub.run.assembly import Run
+
 from .helpers import ROOT, run_scenario
 
 SWITCH = ROOT / "scenarios" / "switch.yaml"
@@ -138,3 +140,37 @@ def test_a_replay_of_a_faulted_run_gives_the_same_files_bit_for_bit(tmp_path):
     run_scenario(SWITCH, again, {"faults": faults, "record": record}, replay=first)
     for name in ("recording.csv", "events.csv", "commands.csv"):
         assert read(first, name) == read(again, name), name
+
+
+@pytest.mark.parametrize("seconds", [0.3, 0.9])
+def test_a_run_resumed_from_a_checkpoint_keeps_its_faults(tmp_path, monkeypatch, seconds):
+    """Saved before the faults began (0.3 s) and while they are in effect (0.9 s: the blade stuck,
+    the belt failing, the misread, the reader's count kept): the resumed run goes on bit for bit.
+    Bottles as multibodies, as tests/test_checkpoint.py resumes them bit for bit."""
+    from hub.physics.world import PhysicsWorld
+    from hub.run import checkpoint
+
+    monkeypatch.setattr(PhysicsWorld, "MAXIMAL", False)
+    faults = [{"name": "stuck", "kind": "part_stuck", "target": "sw", "after": {"event": "reader.trigger.on_enter",
+                                                                               "count": 2}, "for": 1.0},
+              {"name": "slow", "kind": "belt_failure", "target": "sw.main", "speed": 0.3, "at": 0.5, "for": 1.0},
+              {"name": "misread", "kind": "reader_fault", "target": "reader", "reads": "wrong", "destination": "Q",
+               "at": 0.2}]
+    record = ["a.body.position", "b.body.position", "sw.blade.in_working", "reader.trigger.destination"]
+    settings = {"faults": faults, "record": record}
+    scenario = load_scenario(SWITCH, settings)
+    saved_at = round(seconds * 150)
+    with Run(scenario, out=tmp_path / "whole") as whole:
+        whole.run(saved_at)
+        data = checkpoint.capture(whole)
+        whole.run()
+    with Run(load_scenario(SWITCH, settings), out=tmp_path / "resumed", resume=(data, "checkpoint")) as resumed:
+        resumed.run()
+        assert resumed.summary().section("faults").as_dict() == whole.summary().section("faults").as_dict()
+
+    def after(name):
+        lines = (tmp_path / name).read_text().splitlines()[1:]
+        return [line for line in lines if float(line.split(",")[0]) > seconds]
+
+    assert after("resumed/recording.csv") == after("whole/recording.csv")
+    assert after("resumed/events.csv") == after("whole/events.csv")

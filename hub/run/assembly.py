@@ -75,24 +75,25 @@ class Run:
                 stops = [self.interruption, *stops]
             # Imported here: replaying needs the bus package's command parser, not a bus.
             from hub.bus.commands import Commands, load_commands
-            from hub.run.faults import FaultBook, FaultSchedule
+            from hub.run.faults import FaultBook, FaultSchedule, FaultsState
             # Faults begin and end as commands (hub/run/faults.py): the scenario's schedule gives
             # them to a Commands of their own; a replay's recorded commands hold them instead.
             self.faults = FaultBook(plant)
             commands = Commands(plant, self.recorder, load_commands(replay, plant, self.faults)) \
                 if replay is not None else None
             self.commands = commands
-            manipulators = [commands] if commands is not None else []
+            manipulators, schedule = [commands] if commands is not None else [], None
             if commands is not None:
                 self.faults.attach(commands)
             elif scenario.faults:
                 scheduled = Commands(plant, self.recorder)
                 self.faults.attach(scheduled)
-                manipulators = [FaultSchedule(plant, scenario.faults, scheduled), scheduled]
+                schedule = FaultSchedule(plant, scenario.faults, scheduled)
+                manipulators = [schedule, scheduled]
             self.contributed = _contributions(scenario, plant)
             from hub.run.exercise import FaultsFigure, Score   # the faults that began, the exercise's score
-            if scenario.faults:
-                self.contributed.append(FaultsFigure(self.faults, rate))
+            if scenario.faults:   # in the summary, and in a checkpoint
+                self.contributed += [FaultsFigure(self.faults, rate), FaultsState(self.faults, schedule)]
             if scenario.exercise is not None:
                 self.contributed.append(Score(scenario.exercise, self.contributed, self.faults, rate))
             self.bodies = None   # the body recording, for playback (run.record_bodies)

@@ -143,6 +143,32 @@ class FaultBook:
     def slots(self, obj: str, comp: str) -> dict[str, int]:
         return self._slots[(obj, comp)]
 
+    # --- checkpoints (hub/core/state.py: saved by FaultsState) ---------------------------------
+    def save_state(self) -> dict:
+        """The faults in effect (each its command and its own state), the log, and the forces of
+        the Commands that applies them (a belt failure's)."""
+        c = self.commands
+        return {"active": [(name, e.target, dict(e.value), {k: getattr(e, k) for k in type(e).STATE})
+                           for name, e in self.active.items()],
+                "log": [(f.name, f.kind, f.target, f.start, f.end) for f in self.log],
+                "forces": None if c is None else (dict(c._forced), dict(c._own), dict(c._released))}
+
+    def restore_state(self, saved: dict) -> None:
+        self.active.clear()
+        for name, target, value, own in saved["active"]:
+            obj, comp = target.split(".")
+            effect = _EFFECTS[value["kind"]](self, obj, comp, value)
+            for key, item in own.items():
+                setattr(effect, key, item)
+            self.active[name] = effect
+        self._ending.clear()
+        self.log[:] = [Started(*f) for f in saved["log"]]
+        if saved["forces"] is not None and self.commands is not None:
+            for held, back in zip((self.commands._forced, self.commands._own, self.commands._released),
+                                  saved["forces"]):
+                held.clear()
+                held.update(back)
+
     def component(self, obj: str, comp: str):
         return self._owners[(obj, comp)]
 
@@ -160,7 +186,10 @@ def _bad_types(params: dict) -> list[str]:
 
 
 class _Effect:
+    STATE: tuple[str, ...] = ()   # what changes while it lasts (FaultBook.save_state)
+
     def __init__(self, book: FaultBook, obj: str, comp: str, value: dict):
+        self.target = f"{obj}.{comp}"
         self.book = book
         self.owner = book.component(obj, comp)
         self.slot = book.slots(obj, comp)
@@ -184,6 +213,8 @@ class _Effect:
 
 
 class _SensorStuck(_Effect):
+    STATE = ("first",)
+
     def begin(self):
         self.first = True
 
@@ -228,6 +259,7 @@ class _PartStuck(_Effect):
 
 
 class _ReaderFault(_Effect):
+    STATE = ("kept",)
     ENTRY = ("on_enter", "object", "destination", "filled", "capped")
 
     def begin(self):
@@ -249,6 +281,8 @@ class _ReaderFault(_Effect):
 
 
 class _LogicDead(_Effect):
+    STATE = ("frozen",)
+
     def begin(self):
         values = self.book.signals.values
         self.frozen = [(i, values[i]) for i in self.sources()]
@@ -263,6 +297,8 @@ class _LogicDead(_Effect):
 
 
 class _BottleTipped(_Effect):
+    STATE = ("armed", "first")
+
     def begin(self):
         self.armed, self.first = True, True
 
@@ -327,6 +363,29 @@ class FaultSchedule:
             self.pending.remove(n)
             self.ends[n] = tick + spec.duration if spec.duration is not None else spec.end
             self.commands.inject(Command("fault", spec.target, spec.message(), "scenario"))
+
+
+class FaultsState:
+    """The faults' part of a checkpoint (hub/run/checkpoint.py walks the run's contributed
+    parts): the book's faults in effect and forces, and the schedule's counts, starts and ends."""
+
+    def __init__(self, book: FaultBook, schedule: FaultSchedule | None):
+        self.book = book
+        self.schedule = schedule
+
+    def save_state(self) -> dict:
+        s = self.schedule
+        return {"book": self.book.save_state(),
+                "schedule": None if s is None else (list(s.pending), list(s.counts), dict(s.ends))}
+
+    def restore_state(self, saved: dict) -> None:
+        self.book.restore_state(saved["book"])
+        if self.schedule is not None and saved["schedule"] is not None:
+            pending, counts, ends = saved["schedule"]
+            self.schedule.pending[:] = pending
+            self.schedule.counts[:] = counts
+            self.schedule.ends.clear()
+            self.schedule.ends.update(ends)
 
 
 def fault_slots(scenario) -> set[SlotRef]:
