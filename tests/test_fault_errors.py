@@ -107,11 +107,19 @@ def test_a_fault_given_with_set_is_blamed_on_set():
     ('{"kind": "part_stuck"}', "fault: its value is a map with the fault's `name`"),
     ('{"name": "x", "kind": "belt_failure", "speed": 2}', "fault x: `speed` cannot be 2"),
     ('{"name": "x", "kind": "sensor_stuck"}', "fault x: sensor_stuck needs `value`"),
+    ('{"name": "x", "kind": "belt_failure", "speed": "fast"}', "fault x: `speed` cannot be fast"),
+    ('{"name": "x", "kind": "belt_failure", "speed": true}', "fault x: `speed` cannot be True"),
+    ('{"name": "x", "kind": "sensor_stuck", "value": 1}', "fault x: `value` cannot be 1"),
+    ('{"name": "x", "kind": "sensor_stuck", "value": true, "colour": 3}', "fault x: unknown parameter 'colour'"),
+    ('{"name": "x", "kind": "reader_fault", "reads": "garbage"}', "fault x: `reads` is nothing or wrong"),
+    ('{"name": "x", "kind": "reader_fault", "reads": "nothing", "id": "M1"}',
+     "fault x: `id` goes with `reads: wrong`; a reader that reads nothing reads no id"),
+    ('[1, 2]', "fault: its value is a map with the fault's `name`"),
 ])
 def test_a_bad_fault_in_a_replayed_commands_file_names_its_line(tmp_path, value, message):
     scenario = load_scenario(ROOT / "scenarios" / "switch.yaml")
     (tmp_path / "events.csv").write_text("time,tick,slot,detail\n")
-    slot = "reader.trigger" if "sensor" in value else "sw.main" if "belt" in value else "sw.blade"
+    slot = "reader.trigger" if "sensor" in value or "reader" in value else "sw.main" if "belt" in value else "sw.blade"
     quoted = value.replace('"', '""')
     (tmp_path / "commands.csv").write_text(f'time,tick,op,slot,value,by\n0.1,15,fault,{slot},"{quoted}",scenario\n')
     with Run(scenario) as run:

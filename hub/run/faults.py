@@ -96,14 +96,10 @@ class FaultBook:
         found, why = target_component(kind, target, self._tables)
         if found != target:
             raise CommandError(f"fault {value['name']}: {why or f'name the component: {found}'}")
-        problems = []
         params = {k: v for k, v in value.items() if k not in ("name", "kind")}
-        made = check_values(kind, params, (), lambda path, text: problems.append(text))
-        unknown = set(params) - {"value", "speed", "reads", "destination", "id"}
-        if not problems and unknown:
-            problems.append(f"unknown parameter {sorted(unknown)[0]!r}")
-        if not problems:
-            problems += _bad_types(made)
+        unknown = sorted(str(k) for k in set(params) - {"value", "speed", "reads", "destination", "id"})
+        problems = [f"unknown parameter {unknown[0][:80]!r}"] if unknown else _bad_types(params)
+        made = None if problems else check_values(kind, params, (), lambda path, text: problems.append(text))
         if problems:
             raise CommandError(f"fault {value['name']}: {problems[0]}")
         return Command("fault", target, {"name": value["name"], "kind": kind, **made}, by)
