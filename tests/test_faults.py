@@ -65,6 +65,9 @@ def test_a_barrier_stuck_off_gives_the_entry_it_missed_when_it_ends():
                          until=2.4)
     assert sim["belt.drive.running"] is False
     assert 1.02 < sim["bottle.body.position"][0] < 1.15
+    # The event log has what the sensor reported: not the entry it missed, but the fault's own rows.
+    assert [(t, slot) for t, slot, _ in events if slot.startswith("barrier") and t <= 2.0] == []
+    assert [(t, d.split(" ")[0]) for t, slot, d in events if slot == "@fault"] == [(0.0, "fault"), (2.0, "repair")]
 
 
 @pytest.mark.parametrize("speed, low, high", [(0.0, 0.33, 0.345), (0.5, 0.41, 0.435)])

@@ -9,9 +9,10 @@ targets fit):
 - `sensor_stuck` — `value: true`: `occupied` is true and `on_stay` fires at every point,
   `on_enter` fires at the first, and nothing else the sensor gives (`on_leave`, the id) goes
   out; `false`: `occupied` is false and nothing else goes out. When it ends, the edge the
-  sensor missed is given: `on_leave` if it was stuck on and is free, `on_enter` if it was stuck
-  off and sees a bottle. The event log still lists the bottles that physically entered and
-  left (the world's truth); the fault's own rows say when the sensor lied.
+  sensor missed is given: `on_leave` if it was stuck on and is free, `on_enter` (and `object`)
+  if it was stuck off and sees a bottle. A fault `after` an event counts what the sensor sensed,
+  before any fault or operator changed it. The event log has what the sensor reported (an entry
+  it missed is not there), and the fault's own rows say when it lied.
 - `belt_failure` — the drive's `speed` is forced (as `force` does) to `speed` × what it was at
   the fault's start; the belt still says it runs. At the end the drive gets back what its
   logic gave it meanwhile (as `release` does).
@@ -232,6 +233,9 @@ class _SensorStuck(_Effect):
             signals.active[slot["on_leave"]] = True
         elif not self.value["value"] and seen:
             signals.active[slot["on_enter"]] = True
+            inside = getattr(self.owner.latch, "inside", ())
+            if "object" in slot and inside:   # which bottle it now sees: the last inside, as on an entry
+                signals.emit(slot["object"], self.book.plant.world.labels[inside[-1]])
 
 
 class _BeltFailure(_Effect):
