@@ -87,7 +87,7 @@ class EnipServer:
                     raise PlanthubError(f"EtherNet/IP server at {self.host}:{self.port} did not start: {exc}") from None
                 time.sleep(0.05)
 
-    async def publish(self, changed: dict) -> None:
+    def publish(self, changed: dict) -> None:
         """Nothing to do: every read is answered from the image."""
 
     async def stop(self) -> None:

@@ -60,7 +60,7 @@ class ModbusServer:
                 break
             await asyncio.sleep(0.01)
 
-    async def publish(self, changed: dict) -> None:
+    def publish(self, changed: dict) -> None:
         """Nothing to do: every read is answered from the image."""
 
     async def stop(self) -> None:

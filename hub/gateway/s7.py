@@ -73,7 +73,8 @@ class S7Server:
             raise PlanthubError(f"the S7 server could not listen at {self.host}:{self.port}: {exc}") from None
         self.server = server
 
-    async def publish(self, changed: dict) -> None:
+    def publish(self, changed: dict) -> None:
+        """In the plant's thread: snap7 serves from threads of its own, each read under the area's lock."""
         for slot in sorted(changed, key=lambda s: s == "cycle"):   # the scan's number last: then all is there
             self._put(self.image.tags.by_slot[slot], changed[slot])
 

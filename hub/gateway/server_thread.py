@@ -26,7 +26,10 @@ def refuse_taken(host: str, port: int, failed: str) -> None:
 
 
 class ServerThread:
-    """Runs `protocol` (an object with async start(), publish(changed) and stop()) in a thread."""
+    """Runs `protocol` (an object with async start(), publish(changed) and stop()) in a thread.
+    `publish` is a coroutine run in the loop where the server's state is the loop's alone (asyncua),
+    or a plain method run in the plant's thread where the server guards its state itself or answers
+    from the process image (snap7's area locks, Modbus, cpppo)."""
 
     def __init__(self, protocol, what: str):
         self.protocol, self.what = protocol, what
@@ -56,8 +59,12 @@ class ServerThread:
             raise PlanthubError(f"the {self.what} could not {doing}: {exc}") from exc
 
     def publish(self, changed: dict) -> None:
-        if changed:
+        if not changed:
+            return
+        if asyncio.iscoroutinefunction(self.protocol.publish):
             self.call(self.protocol.publish(changed), doing="publish the plant's values")
+        else:   # no hop into the loop and back: it cost 0.2-0.6 ms a scan while the loop served the PLC's polls
+            self.protocol.publish(changed)
 
     def close(self) -> None:
         if self.thread.is_alive():
