@@ -10,13 +10,13 @@ import csv
 
 import pytest
 
-from hub.bus.session import Bus, wait_until
 from hub.bus.commands import CommandError, Commands
+from hub.bus.session import Bus, wait_until
+from hub.bus.settings import BusSettings
+from hub.core.slots import SlotType
 from hub.live import Viewer
 from hub.run.plant import Plant
 from hub.run.recorder import Recorder
-from hub.bus.settings import BusSettings
-from hub.core.slots import SlotType
 from hub.scenario.checker import load_scenario
 
 from .bus_support import BELT_FMU, hub, same_files
@@ -165,7 +165,7 @@ def commands():
     ({"op": "force", "slot": "belt.drive.run", "value": 1}, "belt.drive.run is bool: expected true or false, got 1"),
     ({"op": "set", "slot": "stop.value.set"}, "stop.value.set is read by its own component within the step; "
                                                "command the slot that feeds it instead"),
-    ({"op": "freeze"}, "expected a map with op one of set, force, release, stop, pause, resume, step, pace, checkpoint, got {'op': 'freeze'}"),
+    ({"op": "freeze"}, "expected a map with op one of set, force, release, stop, pause, resume, step, pace, checkpoint, fault, repair, got {'op': 'freeze'}"),
 ])
 def test_bad_commands_are_named(commands, message, error):
     with pytest.raises(CommandError) as info:
