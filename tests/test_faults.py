@@ -10,10 +10,9 @@ import csv
 
 import pytest
 
+from hub.run.assembly import Run
 from hub.run.simulation import Simulation
 from hub.scenario.checker import load_scenario
-
-from hub.run.assembly import Run
 
 from .helpers import ROOT, run_scenario
 

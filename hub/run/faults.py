@@ -39,7 +39,7 @@ import math
 from dataclasses import dataclass
 
 from hub.bus.commands import MAX_NAME, Command, CommandError
-from hub.core.slots import Direction, SlotRef
+from hub.core.slots import Direction
 from hub.scenario.faults import KINDS, check_values, target_component
 
 
@@ -386,9 +386,3 @@ class FaultsState:
             self.schedule.counts[:] = counts
             self.schedule.ends.clear()
             self.schedule.ends.update(ends)
-
-
-def fault_slots(scenario) -> set[SlotRef]:
-    """The void sources the scenario's faults count (for Plant: they must be computed)."""
-    return {f.event for f in getattr(scenario, "faults", ()) if f.event is not None}
-
