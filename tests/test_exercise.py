@@ -75,8 +75,10 @@ def test_planthub_test_judges_each_goal_and_the_score(write_scenario, tmp_path, 
     path = write_scenario(SCENE % 100)
     code, out, _ = planthub(capsys, "test", path, "--junit", tmp_path / "ex.xml")
     assert code == 1 and "  ✗ fast enough — 26.67 a minute" in out.splitlines()
-    failed = ElementTree.parse(tmp_path / "ex.xml").getroot().find(".//failure")
-    assert failed.text == "expected at least 100 deliveries a minute: 26.67 a minute"
+    root = ElementTree.parse(tmp_path / "ex.xml").getroot()
+    assert root.find(".//failure").text == "expected at least 100 deliveries a minute: 26.67 a minute"
+    properties = {p.get("name"): p.get("value") for p in root.findall(".//property")}
+    assert (properties["score"], properties["passed"]) == ("80", "true")
 
 
 def plant(times, jams=(), end=60.0, misrouted=()):

@@ -151,6 +151,8 @@ class _Verdicts:
         sys.stdout.flush()   # the emergency path ends the process with os._exit, which flushes nothing
         if self.args.junit:
             ended = [("ended", summary.ended.reason)] if summary.ended is not None else []
+            exercise = summary.section("exercise")   # an exercise's score, for CI's dashboards
+            ended += [("score", f"{exercise.score:g}"), ("passed", str(exercise.passed).lower())] if exercise else []
             self.junit(outcomes, seconds, ended=ended, output="\n".join(summary.lines(verbose=True)) + "\n",
                        interrupted=interrupted)
         return failed + (interrupted is not None)
