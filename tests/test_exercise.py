@@ -10,7 +10,9 @@ import json
 from types import SimpleNamespace
 from xml.etree import ElementTree
 
+from hub.run.exercise import SCORE, _ScoreCase
 from hub.scenario.exercise import Goal, judge, outage
+from hub.scenario.expectations import Outcome, interrupted
 from modules.plant.jams import Jam
 
 from .helpers import planthub
@@ -106,3 +108,15 @@ def test_jam_and_misroute_goals_say_what_they_measured():
     wrong = SimpleNamespace(bottle="M7", destination="C", sink="sink_F")
     verdict = judge(Goal("misrouted", 0, 1, "m"), plant([1.0], misrouted=[wrong]), [])
     assert (verdict.met, verdict.message) == (False, "1 misrouted: M7 (for C) at sink_F")
+
+
+def test_an_interrupted_run_judges_only_the_goals_the_rest_of_it_could_not_change():
+    goals = [(Goal("misrouted", 0, 1, "none misrouted"), False), (Goal("misrouted", 0, 1, "none yet"), True),
+             (Goal("longest_jam", 5, 1, "short jams"), False), (Goal("delivered", 10, 1, "ten"), True),
+             (Goal("delivered", 20, 1, "twenty"), False), (Goal("throughput", 9, 1, "pace"), True),
+             (_ScoreCase(SCORE, 100.0), False)]
+    outcomes = interrupted([Outcome(g, met, "so far") for g, met in goals], 300, 150)
+    assert [(o.expectation.name, o.judged, o.passed) for o in outcomes] == [
+        ("none misrouted", True, False), ("none yet", False, False), ("short jams", True, False),
+        ("ten", True, True), ("twenty", False, False), ("pace", False, False), ("the score", False, False)]
+    assert outcomes[1].message == "not judged: the run was interrupted at t = 2 s (so far: so far)"

@@ -43,6 +43,12 @@ class Goal:
     name: str
     line: int | None = None
 
+    def settled(self, met: bool) -> bool:
+        """Whether the verdict stands if the run ends here (an interrupted run): a goal failed
+        that the rest of the run could only make worse (misroutes, a jam's length), or one met that
+        it could not undo (bottles delivered). The rest waits for the run's end."""
+        return (not met and self.key in ("misrouted", "longest_jam")) or (met and self.key == "delivered")
+
     def describe(self) -> str:
         return {"delivered": f"at least {self.limit:g} bottles delivered",
                 "misrouted": "no bottle misrouted" if self.limit == 0 else f"at most {self.limit:g} misrouted",

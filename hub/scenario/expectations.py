@@ -96,6 +96,8 @@ def interrupted(outcomes: list[Outcome], tick: int, rate: int) -> list[Outcome]:
             final = e.at is not None and e.at <= tick   # its moment came: judged as it is
         elif isinstance(e, Implied):
             final = outcome.passed                      # the orders were delivered
+        elif hasattr(e, "settled"):   # an exercise's goal or score (hub/scenario/exercise.py) says itself
+            final = e.settled(outcome.passed)
         else:   # an `always`, `jams: none`: a failure seen is one, a `when` that did not fire yet is not
             final = not outcome.passed and not outcome.message.startswith(NEVER_JUDGED)
         if final:
