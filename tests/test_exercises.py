@@ -70,3 +70,16 @@ def test_a_stuck_sensor_passed_on_holds_the_separator_shut(capsys):
     assert "  ✗ never 10 s without a delivery after a fault — B327 stuck on: at most 16.12 s without a delivery " \
            "(from 73.880 s to the end)" in lines
     assert "  ✗ at least 28 bottles delivered — 21 delivered" in lines
+
+
+def test_validate_says_when_each_fault_starts_a_drawn_time_too(capsys):
+    code, out, _ = planthub(capsys, "validate", SEPARATOR)
+    assert code == 0
+    assert out.splitlines()[1:] == [
+        "  fault     B327 stuck on: sensor_stuck at B327.trigger (value True), from 47.96 s (drawn from run.seed in "
+        "[38, 48] s) to the end",
+        "  exercise  4 goals (never 10 s without a delivery after a fault, at least 28 bottles delivered, no bottle "
+        "misrouted, no jam longer than 5 s), passes at 100 %"]
+    code, out, _ = planthub(capsys, "validate", READER, "--set", "run.seed=3")
+    assert out.splitlines()[1] == ("  fault     r3 reads nothing: reader_fault at r3.trigger (reads 'nothing'), "
+                                   "from the 5th r3.trigger.on_enter to the end")

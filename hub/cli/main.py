@@ -174,6 +174,12 @@ def _validate(args) -> int:
     run = scenario.run
     print(f"{args.scenario}: ok — {len(scenario.objects)} objects, {len(scenario.flows)} flows, "
           f"{len(scenario.record)} recorded slots, {run.end_tick / run.physics_rate:g} s at {run.physics_rate} Hz")
+    for fault in scenario.faults:   # when each starts, a drawn time too (hub/scenario/faults.py)
+        print(f"  fault     {fault.describe(run.physics_rate)}")
+    if scenario.exercise is not None:
+        goals = scenario.exercise.goals
+        print(f"  exercise  {len(goals)} goal{'s' * (len(goals) != 1)} ({', '.join(g.name for g in goals)}), "
+              f"passes at {scenario.exercise.passing:g} %")
     for obj in scenario.objects:   # what the run can live with, said before anyone runs it
         for module, params, where in ((obj.module, obj.params, obj.name), (obj.logic_module, obj.logic, f"{obj.name}.logic")):
             for place, note in (module.notes(params) if module is not None and params is not None else ()):

@@ -120,14 +120,28 @@ class FaultSpec:
     duration: int | None = None   # ticks, a whole number of communication steps
     end: int | None = None        # tick on the grid
     line: int | None = None
+    window: tuple[float, float] | None = None   # `between`: the window its start was drawn from, s
 
     def message(self) -> dict:
         """The command's value (hub/bus/commands.py `fault`): everything the fault does, as JSON."""
         return {"name": self.name, "kind": self.kind, **self.parameters}
 
     def describe(self, rate: int) -> str:
+        """What, where and when, in a line (`planthub validate`)."""
         text = ", ".join(f"{k} {v!r}" for k, v in self.parameters.items())
-        return f"{self.kind} at {self.target}" + (f" ({text})" if text else "")
+        what = f"{self.kind} at {self.target}" + (f" ({text})" if text else "")
+        if self.event is not None:
+            start = f"from the {self.count}{_th(self.count)} {self.event}"
+        else:
+            drawn = f" (drawn from run.seed in [{self.window[0]:g}, {self.window[1]:g}] s)" if self.window else ""
+            start = f"from {self.start / rate:g} s{drawn}"
+        end = f" for {self.duration / rate:g} s" if self.duration is not None else \
+            f" to {self.end / rate:g} s" if self.end is not None else " to the end"
+        return f"{self.name}: {what}, {start}{end}"
+
+
+def _th(n: int) -> str:
+    return "th" if 10 <= n % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(n % 10, "th")
 
 
 def on_grid(seconds: float, rate: int, substeps: int) -> int:
@@ -257,5 +271,6 @@ def check_faults(checker, specs: list, tables: dict, run) -> list[FaultSpec]:
                                                  + ("start" if "at" in spec else "latest start")
                                                  + f" at {latest / rate:g} s")
                 continue
-        out.append(FaultSpec(name, kind, target, params, start, event, count, duration, until, names[name]))
+        window = tuple(spec["between"]) if "between" in spec else None
+        out.append(FaultSpec(name, kind, target, params, start, event, count, duration, until, names[name], window))
     return out
