@@ -13,10 +13,9 @@ import math
 from hub.core.component import Component
 from hub.core.errors import Problem, ScenarioError
 from hub.core.logic_spec import LogicSpec
-from hub.physics.frames import Arc, Pose, Straight
 from hub.core.registry import did_you_mean
 from hub.core.slots import Slot
-
+from hub.physics.frames import Arc, Pose, Straight
 from modules.params import POSITION, length
 
 RAIL_THICKNESS = 0.01

@@ -27,7 +27,6 @@ import math
 from hub.core.component import Component
 from hub.core.module import Module
 from hub.core.slots import Slot
-
 from modules.params import POSITION, TRANSPORT, length
 from modules.plant import LOOK
 

@@ -33,7 +33,7 @@ together — a threshold for int → real, a scale of zero width, `from` equal t
 from __future__ import annotations
 
 import math
-from typing import Callable
+from collections.abc import Callable
 
 from hub.core import state
 from hub.core.component import Component

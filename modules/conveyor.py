@@ -7,9 +7,8 @@ from __future__ import annotations
 
 from hub.core.module import Module
 from hub.physics.frames import Straight
-
-from modules.belt import LOGIC as BELT_LOGIC
 from modules.belt import COMMON, PLACEMENT, BeltDrive, build_segment, check_placement, start_pose
+from modules.belt import LOGIC as BELT_LOGIC
 from modules.params import length
 
 __all__ = ["Conveyor", "BeltDrive"]

@@ -13,9 +13,8 @@ import math
 
 from hub.core.module import Module
 from hub.physics.frames import Arc
-
-from modules.belt import LOGIC as BELT_LOGIC
 from modules.belt import COMMON, PLACEMENT, RAIL_THICKNESS, BeltDrive, build_segment, check_placement, start_pose
+from modules.belt import LOGIC as BELT_LOGIC
 from modules.params import length
 
 

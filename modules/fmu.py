@@ -36,17 +36,16 @@ import sys
 
 from hub.bus.lockstep import RemoteSpec
 from hub.bus.tls import LAUNCHED_SCHEMA, launched_problems
+from hub.core.logic_spec import CO_SIMULATION, INTERFACES, MODEL_EXCHANGE, REPLACED, RUNS, SOLVERS, own_step_problems
+from hub.core.module import Module
+from hub.core.registry import did_you_mean
+from hub.core.slots import SlotFamily, SlotType
 from hub.logic.component import LogicComponent
 from hub.logic.factory import SlavePlan, make_slave
-from hub.core.logic_spec import (CO_SIMULATION, INTERFACES, MODEL_EXCHANGE, REPLACED, RUNS, SOLVERS,
-                                  own_step_problems)
 from hub.logic.fmi import FmuError, inspect_fmu
 from hub.logic.fmi_me import Integration
 from hub.logic.fmi_variables import parameter_problems, parameter_values
 from hub.logic.ports import fmu_ports
-from hub.core.module import Module
-from hub.core.registry import did_you_mean
-from hub.core.slots import SlotFamily, SlotType
 
 _SLOT_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 

@@ -21,8 +21,8 @@ import numpy as np
 from numba import njit
 
 from hub.core.component import Component
-from hub.physics.frames import Boxes
 from hub.core.slots import Slot
+from hub.physics.frames import Boxes
 
 # A bottle must keep this far from a gate's boxes for it to close. Only overlap at the moment
 # of switching is harmful: a bottle that runs into the gate in the next tick is stopped by the

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 from hub.core.module import Module
 from hub.core.slots import Slot
-
 from modules.manifest import cargo
 from modules.trigger import VolumeTrigger, add_volume, volume_parameters
 

@@ -6,7 +6,6 @@ an object that enters and leaves between two communication points gives both eve
 from __future__ import annotations
 
 from hub.core.module import Module
-
 from modules.trigger import VolumeTrigger, add_volume, volume_parameters
 
 

@@ -17,11 +17,11 @@ from __future__ import annotations
 
 from hub.bus.lockstep import RemoteSpec
 from hub.bus.tls import LAUNCHED_SCHEMA, launched_problems
-from hub.logic.component import LogicComponent
-from hub.logic.factory import SlavePlan, make_slave
 from hub.core.logic_spec import REPLACED, RUNS, own_step_problems
 from hub.core.module import Module
 from hub.core.slots import Slot, SlotFamily, SlotType
+from hub.logic.component import LogicComponent
+from hub.logic.factory import SlavePlan, make_slave
 
 _NAME = "^[A-Za-z_][A-Za-z0-9_]*$"
 _TYPES = [t.value for t in SlotType]

@@ -33,7 +33,6 @@ from hub.core.module import Module
 from hub.core.slots import Slot
 from hub.physics.frames import Pose, Straight
 from hub.physics.moving import Leg
-
 from modules.belt import COMMON, PLACEMENT, RAIL_THICKNESS, BeltDrive, build_belt, check_placement, start_pose
 from modules.params import length
 

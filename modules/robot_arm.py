@@ -24,9 +24,8 @@ from hub.core.component import Component
 from hub.core.errors import SimulationError
 from hub.core.logic_spec import LogicSpec
 from hub.core.module import Module
-from hub.physics.robot import JointMotion, reachable
 from hub.core.slots import Slot
-
+from hub.physics.robot import JointMotion, reachable
 from modules.params import POSITION, YAW, length
 from modules.trigger import VolumeTrigger
 
@@ -57,7 +56,7 @@ class Gripper(VolumeTrigger):
     def sense(self, tick):
         super().sense(tick)
         self.reported, self.changes = self.changes, []
-        for event, body in self.reported:
+        for event, _ in self.reported:
             self.emit(event)
         self.emit("holding", self.body is not None)
         self.emit("held", "" if self.body is None else self.world.labels[self.body])

@@ -41,7 +41,6 @@ import math
 
 from hub.core.logic_spec import LogicSpec
 from hub.core.module import Module
-
 from modules.gate import GATE_PARAMETERS, Gate, along, gate_across
 from modules.params import POSITION, YAW
 

@@ -24,9 +24,8 @@ from dataclasses import dataclass
 from hub.core.component import Component
 from hub.core.module import Module
 from hub.core.slots import Slot, SlotFamily
-from modules.plant import FIGURES, LOOK, ORDERS
-
 from modules.manifest import cargo
+from modules.plant import FIGURES, LOOK, ORDERS
 from modules.trigger import add_volume, volume_parameters
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")

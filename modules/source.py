@@ -29,12 +29,10 @@ from hub.core.component import Component
 from hub.core.errors import SimulationError
 from hub.core.module import Module
 from hub.core.slots import Slot
-from modules.plant import FIGURES, LOOK
-
 from modules.bottle import BottleBody
 from modules.manifest import register
 from modules.params import POSITION, TRANSPORT, length
-
+from modules.plant import FIGURES, LOOK
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")   # an object name (schemas/scenario.schema.json)
 

@@ -29,10 +29,10 @@ user never wrote; and errors in the SSP are named at the object's `file:` line e
 """
 from __future__ import annotations
 
+from hub.core.logic_spec import CO_SIMULATION
 from hub.core.module import Module
 from hub.core.slots import Slot, SlotFamily
 from hub.logic.component import LogicComponent
-from hub.core.logic_spec import CO_SIMULATION
 from hub.logic.ssp import SspError, override_problems, read_ssp, start_values
 from hub.logic.ssp_slave import SspSlave
 

@@ -24,10 +24,9 @@ import numpy as np
 from hub.core.component import Component
 from hub.core.module import Module
 from hub.core.slots import Slot
-
 from modules.manifest import cargo
-from modules.trigger import add_volume, volume_parameters
 from modules.plant import LOOK
+from modules.trigger import add_volume, volume_parameters
 
 OPERATIONS = {"fill": "filled", "cap": "capped"}
 

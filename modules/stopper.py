@@ -7,7 +7,6 @@ from __future__ import annotations
 import math
 
 from hub.core.module import Module
-
 from modules.gate import GATE_PARAMETERS, Gate, gate_across
 from modules.params import POSITION, YAW
 

@@ -23,9 +23,8 @@ import math
 
 from hub.core.logic_spec import LogicSpec
 from hub.core.module import Module
-from hub.physics.frames import Arc, Pose, Straight
 from hub.core.slots import Slot
-
+from hub.physics.frames import Arc, Pose, Straight
 from modules.belt import COMMON, PLACEMENT, RAIL_THICKNESS, BeltDrive, arc_rail, build_belt, check_placement, start_pose
 from modules.gate import Blocker, TwoPositions
 from modules.params import length

@@ -9,7 +9,6 @@ import math
 
 from hub.core.component import Component
 from hub.core.slots import Slot
-
 from modules.params import POSITION, YAW
 
 

@@ -164,7 +164,7 @@ def bottling_plant() -> None:
 
 def compare(saving: str, column: str, on, off) -> None:
     """The deliveries of the first COMPARED s with a saving on and off: (label, {bottle: (sink, time)}, wall s) each."""
-    (on_label, on_taken, on_wall), (off_label, off_taken, off_wall) = on, off
+    (on_label, on_taken, _), (off_label, off_taken, _) = on, off
     print(f"\n### What {saving} changes: the first {COMPARED:g} s, routing in the hub\n")
     both = sorted(set(on_taken) & set(off_taken))
     shift = np.array([on_taken[b][1] - off_taken[b][1] for b in both])

@@ -22,15 +22,14 @@ from __future__ import annotations
 import math
 import statistics
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
 from hub.core.errors import SimulationError
-from hub.reports import paper
-from hub.reports import runs
+from hub.reports import paper, runs
 from hub.reports.compare import Recorded, compare
 from hub.scenario.checker import load_scenario
 

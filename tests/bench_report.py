@@ -361,10 +361,10 @@ def stability_section(report: Report) -> None:
 def cost_sections(report: Report) -> None:
     from . import bench, bench_view
     from .bench_bottling import bottling_plant
+    from .bench_bus import bus_lockstep, data_plane, watched_plant
     from .bench_campaign import campaign
     from .bench_checkpoint import checkpoints
     from .bench_gateway import gateway
-    from .bench_bus import bus_lockstep, data_plane, watched_plant
     from .bench_plant import plant_elements
     from .fmus import bench_petri
 

@@ -14,7 +14,6 @@ from hub.scenario.checker import load_scenario
 from modules.plant.summary import PlantTally
 
 
-
 def queue_scene(bottles: int, held: bool) -> Path:
     """`bottles` standing on running belts, in queues of five (longer queues climb over each other
     and the rails): at closed stoppers (held), or against a high end wall (jammed) — the most work

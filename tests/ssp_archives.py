@@ -14,6 +14,7 @@ resources/tuning.ssv (`timer.period`, TUNING).
 """
 from __future__ import annotations
 
+import os
 import zipfile
 from pathlib import Path
 
@@ -118,5 +119,7 @@ def timer_belt() -> Path:
         return path
     newest = max(source.stat().st_mtime for source in FMUS.values())
     if not path.is_file() or path.stat().st_mtime < newest:
-        write_ssp(path)
+        # Written beside and renamed: another test process (pytest -n) may be reading it.
+        partial = write_ssp(path.with_name(f"{path.stem}.{os.getpid()}.partial"))
+        os.replace(partial, path)
     return path

@@ -102,7 +102,7 @@ def test_cli_run_prints_the_enter_time_in_its_summary(tmp_path):
         capture_output=True, text=True, check=True, cwd=ROOT,
     )
     expected = analytical_enter_time(load_scenario(SCENARIO))
-    line = next(l for l in proc.stdout.splitlines() if "barrier.trigger.on_enter" in l)
+    line = next(text for text in proc.stdout.splitlines() if "barrier.trigger.on_enter" in text)
     shown = float(line.split("first at")[1].split()[0])
     assert shown == pytest.approx(expected, rel=0.01)
     assert "real-time factor" in proc.stdout and "simulated    3.500 s" in proc.stdout

@@ -18,6 +18,8 @@ from modules.source import Source
 from .helpers import ROOT, planthub_run, run_scenario
 from .plant_watch import run_watched
 
+pytestmark = pytest.mark.slow   # each test runs the bottling plant for 40-56 s
+
 SCENARIO = ROOT / "scenarios" / "bottling_plant.yaml"
 LANES = {f"sink_{lane}": lane for lane in "ABCDEF"}
 IN_PROCESS = {"objects.control.runs": "hub"}

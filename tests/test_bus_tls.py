@@ -11,10 +11,10 @@ import pytest
 import trustme
 
 from hub.bus.session import Bus, BusError, free_loopback_endpoint
-from hub.core.errors import ScenarioError, SimulationError
 from hub.bus.settings import BusSettings
-from hub.scenario.checker import load_scenario
 from hub.bus.tls import TlsSettings
+from hub.core.errors import ScenarioError, SimulationError
+from hub.scenario.checker import load_scenario
 
 from .bus_support import BELT_FMU, BELT_PARTICIPANT, hub, output_of, process, same_files
 from .dataplane_support import every_point, settle

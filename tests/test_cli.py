@@ -204,6 +204,7 @@ def test_a_test_of_a_scenario_that_does_not_load_is_an_error_in_the_junit_file(w
     assert f"{path}:3: objects.b.module: unknown module 'botle' (did you mean 'bottle'?)" in case.find("error").text
 
 
+@pytest.mark.slow
 def test_a_plants_event_table_is_listed_with_v(tmp_path):
     """More kinds of event than the summary lists one a line (the bottling plant's) are counted;
     -v lists them."""

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from hub.core.errors import ScenarioError
-from hub.run.plant import Plant
 from hub.reports.runs import run
+from hub.run.plant import Plant
 from hub.scenario.checker import load_scenario
 
 S_BEND = """

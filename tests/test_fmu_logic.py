@@ -1,6 +1,5 @@
 """FMU logic in the step loop: the belt-drive FMU drives a belt; bad FMUs are named clearly."""
 import csv
-import re
 import zipfile
 
 import pytest

@@ -78,7 +78,9 @@ def test_a_signal_that_finds_planthub_test_stuck_still_gives_the_verdicts_and_th
         deadline = time.monotonic() + 30
         while not (out / "recording.csv").is_file() and time.monotonic() < deadline:
             time.sleep(0.05)
-        time.sleep(1.0)   # the step at t = 0.3 s started milliseconds after the file was made: stuck now
+        # The step at t = 0.3 s starts milliseconds after the file is made (three steps of a
+        # counter) and spins for good: 3 s leave room for a machine busy with other tests.
+        time.sleep(3.0)
         hub.send_signal(signal.SIGINT)
         stdout, stderr = hub.communicate(timeout=30)
     finally:

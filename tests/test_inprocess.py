@@ -80,14 +80,14 @@ def test_a_module_without_a_participant_function_is_named(write_scenario):
 
 
 def test_logic_that_does_not_fit_the_scenario_is_named(write_scenario):
-    path = write_scenario(f"""
+    path = write_scenario("""
         planthub: 1
-        run: {{duration: 1.0, physics_rate: 100}}
+        run: {duration: 1.0, physics_rate: 100}
         objects:
           control:
             module: participant
-            inputs: {{r1_read: void, r1_destination: int}}
-            outputs: {{sw1_work: void}}
+            inputs: {r1_read: void, r1_destination: int}
+            outputs: {sw1_work: void}
             python: [modules.plant_control, --lanes, A]
             runs: hub
         """)

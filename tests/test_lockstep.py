@@ -3,8 +3,8 @@ as a pure-Python participant gives the same recording, byte for byte; joining is
 import pytest
 
 from hub.bus.session import Bus, wait_until
-from hub.core.errors import SimulationError
 from hub.bus.settings import BusSettings
+from hub.core.errors import SimulationError
 from hub.core.slots import SlotType
 
 from .bus_support import BELT_FMU, BELT_PARTICIPANT, hub, output_of, process, same_files

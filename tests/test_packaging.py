@@ -27,6 +27,8 @@ import pytest
 
 from .helpers import ROOT
 
+pytestmark = pytest.mark.slow   # builds a wheel and installs it into a fresh environment
+
 CACHE = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "planthub" / "wheelhouse"
 
 

@@ -10,8 +10,8 @@ import signal
 
 import pytest
 
-from hub.core.errors import SimulationError
 from hub.bus.lockstep import pid_of
+from hub.core.errors import SimulationError
 
 from .bus_support import hub, resumed_at_exit
 from .fmus.fmu_support import build

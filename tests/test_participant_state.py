@@ -19,7 +19,7 @@ from hub.logic.inprocess import InProcessSlave
 from hub.logic.participant_state import pack_state, read_state
 from hub.logic.remote import RemoteSlave
 from modules.plant_control import PlantControl
-from tests.participants.stateful import INPUTS, OUTPUTS, KINDS
+from tests.participants.stateful import INPUTS, KINDS, OUTPUTS
 
 from .helpers import ROOT
 

@@ -8,7 +8,6 @@ import sys
 import pytest
 from PIL import Image, ImageChops
 
-
 from .helpers import ROOT, planthub
 
 #   barrier.trigger.on_enter ──► stop.value.set, stop.value.out (false) ──► belt.drive.run

@@ -153,7 +153,7 @@ any_value = st.recursive(st.none() | st.booleans() | st.integers(-2**40, 2**40) 
 unknown_keys = st.text(alphabet=string.ascii_lowercase + "_", min_size=1, max_size=8)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _leaf(schema: str) -> st.SearchStrategy:
     return from_schema(json.loads(schema), allow_x00=False)
 

@@ -11,8 +11,8 @@ import csv
 import pytest
 
 from hub.bus.session import Bus
-from hub.live import Viewer
 from hub.bus.settings import BusSettings
+from hub.live import Viewer
 
 from .bus_support import BELT_FMU
 from .dataplane_support import every_point, settle

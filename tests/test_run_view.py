@@ -48,6 +48,7 @@ def started_view(started) -> tuple[str, int]:
     return found.group(1), int(found.group(2))
 
 
+@pytest.mark.slow
 def test_the_run_serves_its_view_and_the_view_ends_with_the_run(tmp_path):
     with planthub(tmp_path, "hub", "run", SCENARIO, "--realtime", "--view", "--view-port", 0, "--out",
                   tmp_path / "run", "--set", "run.duration=6") as started:

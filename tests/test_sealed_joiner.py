@@ -237,7 +237,8 @@ class _Wire:
         self.sent.append((key, wire.unpack(payload)))
 
 
-def hub_of(settings=BusSettings()):
+def hub_of(settings: BusSettings | None = None):
+    settings = BusSettings() if settings is None else settings
     spec = RemoteSpec("drive", (("run", SlotType.BOOL),), (("speed", SlotType.REAL),))
     warnings = []
     lockstep = Lockstep(_Wire(settings), RUN, [SimpleNamespace(spec=spec, sent=0, peer=None)], lease=1.0,

@@ -7,7 +7,6 @@ that holds no recording is refused, naming the file and what is wrong with it.
 
     planthub run source_sink.yaml --record-bodies --out DIR ──► DIR ──► planthub view DIR ◄── /ws ── client
 """
-import asyncio
 import csv
 import json
 import math
@@ -69,7 +68,7 @@ async def bodies_for(ws, seconds: float, scene: dict) -> list[tuple[float, int, 
     while (left := deadline - time.monotonic()) > 0:
         try:
             frame = await receive(ws, left)
-        except asyncio.TimeoutError:
+        except TimeoutError:
             break
         if isinstance(frame, bytes):
             out.append((time.monotonic(), *bodies(frame, scene)))

@@ -181,7 +181,7 @@ async def wait_for(ws, predicate, timeout: float = 15.0, what: str = "a frame"):
             raise AssertionError(f"no {what} within {timeout:g} s")
         try:
             item = await receive(ws, left)
-        except asyncio.TimeoutError:
+        except TimeoutError:
             raise AssertionError(f"no {what} within {timeout:g} s") from None
         if predicate(item):
             return item

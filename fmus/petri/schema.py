@@ -8,6 +8,7 @@ import jsonschema
 
 from .problems import did_you_mean
 
+
 def _find_schema() -> Path:
     """schemas/net.schema.json in the nearest folder above this package: the repository's top
     level, or wherever the package was copied with it (e.g. into an FMU's resources)."""

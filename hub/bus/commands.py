@@ -29,12 +29,12 @@ from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
 
+from hub.bus import wire
 from hub.bus.session import Bus, Inbox
 from hub.core.errors import PlanthubError
 from hub.core.observer import Stop
 from hub.core.registry import did_you_mean
 from hub.core.slots import Direction, SlotType
-from hub.bus import wire
 
 OPS = ("set", "force", "release", "stop", "pause", "resume", "step", "pace", "checkpoint", "fault", "repair")
 FAULTS = ("fault", "repair")   # a fault's begin and end: hub/run/faults.py

@@ -24,12 +24,11 @@ import fnmatch
 import math
 import time
 
+from hub.bus import wire
 from hub.bus.outbox import Outbox
 from hub.bus.session import Bus, Inbox, key_intersects
 from hub.bus.settings import BusSettings
 from hub.core.slots import Direction, SlotType
-from hub.bus import wire
-
 
 POLL = 0.05          # s between two looks at which slots have subscribers (at most: see POLL_SHARE)
 POLL_SHARE = 0.002   # of the wall time those looks may take (615 publishers: 60–90 µs a look)

@@ -6,12 +6,12 @@ import time
 import uuid
 from dataclasses import dataclass
 
-from hub.bus.session import Bus, Inbox
-from hub.bus.commands import command_message
-from hub.core.errors import PlanthubError
-from hub.bus.settings import BusSettings
-from hub.core.slots import SlotType
 from hub.bus import wire
+from hub.bus.commands import command_message
+from hub.bus.session import Bus, Inbox
+from hub.bus.settings import BusSettings
+from hub.core.errors import PlanthubError
+from hub.core.slots import SlotType
 
 _TYPES = {f"planthub/{t.value}": t for t in SlotType}
 

@@ -16,13 +16,13 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from hub.bus.session import Bus, Inbox, local_endpoint
-from hub.core.errors import CheckpointError, SimulationError
+from hub.bus import wire
 from hub.bus.launcher import Launched
+from hub.bus.session import Bus, Inbox, local_endpoint
+from hub.bus.tls import environment as tls_environment
+from hub.core.errors import CheckpointError, SimulationError
 from hub.core.registry import did_you_mean
 from hub.core.slots import SlotType
-from hub.bus.tls import environment as tls_environment
-from hub.bus import wire
 
 _log = logging.getLogger(__name__)
 

@@ -27,13 +27,13 @@ import traceback
 import uuid
 from typing import ClassVar
 
+from hub.bus import wire
 from hub.bus.session import Bus, Inbox
-from hub.core.errors import CheckpointError, PlanthubError
 from hub.bus.settings import BusSettings
 from hub.bus.tls import TlsSettings
 from hub.bus.tls import problems as tls_problems
+from hub.core.errors import CheckpointError, PlanthubError
 from hub.core.slots import SlotType
-from hub.bus import wire
 
 _RESERVED = {"inputs", "outputs", "parameters", "start", "step", "close", "interface", "begin", "advance",
              "current_outputs", "save_state", "restore_state"}

@@ -19,13 +19,12 @@ from dataclasses import dataclass
 import zenoh
 
 from hub.bus import log as zenoh_log
-from hub.core.errors import PlanthubError
 from hub.bus.settings import BusSettings
 from hub.bus.tls import TlsSettings
 from hub.bus.tls import common_name as tls_common_name
 from hub.bus.tls import problems as tls_problems
 from hub.bus.tls import refused as tls_refused
-from hub.core.errors import format_path
+from hub.core.errors import PlanthubError, format_path
 
 
 class BusError(PlanthubError):
@@ -198,7 +197,7 @@ class Bus:
         return bool(list(info.peers_zid()) or list(info.routers_zid()))
 
     # --- publishing --------------------------------------------------------------------
-    def publisher(self, key: str, encoding: str, *, lossy: bool = False, express: bool = True) -> "Publisher":
+    def publisher(self, key: str, encoding: str, *, lossy: bool = False, express: bool = True) -> Publisher:
         """A publisher on `key`. `lossy`: drop samples rather than block when a reader lags
         (the data plane); otherwise block (lockstep and control messages must arrive)."""
         congestion = zenoh.CongestionControl.DROP if lossy else zenoh.CongestionControl.BLOCK
@@ -248,7 +247,7 @@ class Bus:
         return None
 
     # --- liveliness --------------------------------------------------------------------
-    def declare_token(self, key: str) -> "Token":
+    def declare_token(self, key: str) -> Token:
         """A liveliness token: alive while this session is, gone at once when the process dies."""
         return Token(self._declare(lambda: self._session.liveliness().declare_token(key), key))
 
@@ -311,7 +310,7 @@ class Publisher:
     def matching(self) -> bool:
         return self._pub.matching_status.matching
 
-    def matching_changes(self) -> "MatchingChanges":
+    def matching_changes(self) -> MatchingChanges:
         """Whether subscribers came or went, kept in Zenoh's own queue until asked: no Python runs in
         Zenoh's threads. Measured in the bottling plant: a callback listener on each of 615 publishers
         made the first viewer's arrival 615 callbacks, each waiting up to 5 ms for the GIL of a loop
@@ -366,7 +365,7 @@ def key_intersects(a: str, b: str) -> bool:
 
 # A session with a callback subscriber that is never closed keeps the interpreter from exiting:
 # whatever a caller forgot is closed at exit.
-_open: "weakref.WeakSet[Bus]" = weakref.WeakSet()
+_open: weakref.WeakSet[Bus] = weakref.WeakSet()
 
 
 @atexit.register

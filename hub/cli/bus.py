@@ -7,8 +7,8 @@ import uuid
 from dataclasses import replace
 from pathlib import Path
 
-from hub.core.errors import PlanthubError
 from hub.bus.settings import BusSettings
+from hub.core.errors import PlanthubError
 from hub.scenario.checker import Scenario
 
 
@@ -81,9 +81,9 @@ def bus_settings(args, scenario: Scenario) -> BusSettings | None:
 
 
 def _serve_fmu(parser, args) -> int:
+    from hub.bus.participant import check_options, serve
     from hub.logic.fmi_me import Integration
     from hub.logic.served import FmuParticipant
-    from hub.bus.participant import check_options, serve
 
     check_options(parser, args)
     rename = {}
@@ -104,10 +104,10 @@ def _serve_fmu(parser, args) -> int:
 def _send(parser, args) -> int:
     import yaml
 
-    from hub.bus.session import Bus, Inbox
+    from hub.bus import wire
     from hub.bus.commands import command_message
     from hub.bus.participant import tls_settings
-    from hub.bus import wire
+    from hub.bus.session import Bus, Inbox
 
     tls = tls_settings(parser, args)
     value = yaml.safe_load(args.value) if args.value is not None else None

@@ -8,9 +8,10 @@ from fnmatch import fnmatchcase
 from pathlib import Path
 
 from hub.cli.exits import FAILED, OK, UsageError
+
 # plot's reading of the command line (shared): the same run-folder errors, the same slot addressing and globs
 from hub.cli.options import number_type, seconds_argument
-from hub.cli.plot import is_glob, match_slots, listed_names, recording_of, slots_of_columns
+from hub.cli.plot import is_glob, listed_names, match_slots, recording_of, slots_of_columns
 from hub.core.registry import did_you_mean
 from hub.reports.compare import DEFAULT_ATOL, DEFAULT_RTOL, Recorded, compare
 from hub.reports.compare_plots import plot_failures, png_name

@@ -6,7 +6,7 @@ import os
 import sys
 from contextlib import contextmanager
 
-from hub.bus import log as zenoh_log   # imports no Zenoh: the level is applied when a session opens
+from hub.bus import log as zenoh_log  # imports no Zenoh: the level is applied when a session opens
 
 _OURS = ("hub", "modules", "planthub")   # module loggers (hub.bus.lockstep …) and named ones (planthub.logic)
 _LEVELS = {-1: logging.WARNING, 0: logging.INFO}

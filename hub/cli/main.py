@@ -12,10 +12,10 @@ from hub.cli.bus import add_commands as add_bus_commands
 from hub.cli.campaign import add_command as add_campaign_command
 from hub.cli.compare import add_command as add_compare_command
 from hub.cli.describe import describe
+from hub.cli.exits import BAD_SCENARIO, FAILED, INTERRUPTED, OK, TABLE, USAGE, UsageError
 from hub.cli.gateway import EXAMPLE as add_gateway_example
 from hub.cli.gateway import add_arguments as add_gateway_arguments
 from hub.cli.gateway import run as run_gateway
-from hub.cli.exits import BAD_SCENARIO, FAILED, INTERRUPTED, OK, TABLE, USAGE, UsageError
 from hub.cli.logs import diagnostics
 from hub.cli.options import add_run_arguments, add_set, overrides, verbosity, verbosity_parent
 from hub.cli.plot import add_command as add_plot_command

@@ -204,7 +204,7 @@ def _bus(args, scenario):
     settings = bus_settings(args, scenario)
     if settings is None:
         return None
-    from hub.bus.session import Bus   # Zenoh is loaded only for a run on the bus
+    from hub.bus.session import Bus  # Zenoh is loaded only for a run on the bus
 
     return Bus(settings)
 

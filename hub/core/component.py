@@ -1,7 +1,8 @@
 """The component contract: a small piece of functionality that owns typed slots."""
 from __future__ import annotations
 
-from typing import ClassVar, Sequence
+from collections.abc import Sequence
+from typing import ClassVar
 
 from hub.core.signals import Signals
 from hub.core.slots import Direction, Slot, SlotType

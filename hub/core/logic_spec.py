@@ -1,9 +1,9 @@
 """State logic attached to an actuator: the module's default FMU, or a replacement, and its wiring."""
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 from hub.core.resources import BUILT_FMUS
 

@@ -1,8 +1,9 @@
 """Observers and stop conditions: what watches a run and what ends it, plugged into the master (libcosim's observer and manipulator roles)."""
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol, Sequence, runtime_checkable
+from typing import Protocol, runtime_checkable
 
 from hub.core.signals import Signals
 

@@ -111,11 +111,11 @@ class Slot:
     doc: str = ""
 
     @classmethod
-    def source(cls, name: str, type_: str, doc: str = "") -> "Slot":
+    def source(cls, name: str, type_: str, doc: str = "") -> Slot:
         return cls(name, SlotType(type_), Direction.SOURCE, doc)
 
     @classmethod
-    def target(cls, name: str, type_: str, doc: str = "") -> "Slot":
+    def target(cls, name: str, type_: str, doc: str = "") -> Slot:
         return cls(name, SlotType(type_), Direction.TARGET, doc)
 
 
@@ -144,9 +144,9 @@ class SlotFamily:
     doc: str
 
     @classmethod
-    def source(cls, name: str, type_: str, doc: str) -> "SlotFamily":
+    def source(cls, name: str, type_: str, doc: str) -> SlotFamily:
         return cls(name, type_, Direction.SOURCE, doc)
 
     @classmethod
-    def target(cls, name: str, type_: str, doc: str) -> "SlotFamily":
+    def target(cls, name: str, type_: str, doc: str) -> SlotFamily:
         return cls(name, type_, Direction.TARGET, doc)

@@ -36,7 +36,6 @@ import numpy as np
 
 from hub.core.errors import CheckpointError
 
-
 _VALUES: set[type] = set()
 
 

@@ -12,11 +12,11 @@ from __future__ import annotations
 import importlib
 import traceback
 
-from hub.core.errors import CheckpointError, PlanthubError, SimulationError
-from hub.logic.participant_state import pack_state, read_state
-from hub.bus.lockstep import RemoteSpec, misfit
 from hub.bus import wire
+from hub.bus.lockstep import RemoteSpec, misfit
+from hub.core.errors import CheckpointError, PlanthubError, SimulationError
 from hub.core.slots import SlotType
+from hub.logic.participant_state import pack_state, read_state
 
 FACTORY = "participant"
 

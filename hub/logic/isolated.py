@@ -11,7 +11,6 @@ from hub.core.lifetime import die_with_parent
 from hub.logic.fmi import FmuInterface
 from hub.logic.fmi_me import Integration, open_fmu
 
-
 #: s an isolated FMU's step may take before its worker is killed (the fmu module's `step_timeout`)
 STEP_TIMEOUT = 10.0
 #: s its worker may take to start, instantiate and initialise the FMU

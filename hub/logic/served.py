@@ -1,12 +1,12 @@
 """An FMU served over the bus as a lockstep participant (`planthub serve-fmu FILE`)."""
 from __future__ import annotations
 
+from hub.bus import wire
+from hub.bus.participant import Participant
 from hub.logic.fmi import inspect_fmu
 from hub.logic.fmi_me import Integration, open_fmu
 from hub.logic.fmi_variables import parameter_values
 from hub.logic.ports import fmu_ports
-from hub.bus.participant import Participant
-from hub.bus import wire
 
 
 class FmuParticipant(Participant):

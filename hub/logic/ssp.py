@@ -21,8 +21,8 @@ transformations, unit conversions — is refused by name, never ignored. A param
 """
 from __future__ import annotations
 
-import math
 import hashlib
+import math
 import posixpath
 import re
 import zipfile

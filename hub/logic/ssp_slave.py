@@ -9,7 +9,6 @@ from hub.logic.fmi_me import open_fmu
 from hub.logic.ssp import SspSystem
 from hub.logic.watchdog import WATCHDOG
 
-
 #: names the layout of `SspSlave.save`'s bytes
 _STATE_FORMAT = "planthub.ssp-slave/1"
 

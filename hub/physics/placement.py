@@ -33,7 +33,7 @@ def overlaps(engine, bodies) -> list[str]:
         near = ((lo[:, None] < s_hi[None] - TOLERANCE) & (hi[:, None] > s_lo[None] + TOLERANCE)).all(2)
         asked = set()
         for i, k in zip(*np.nonzero(near)):
-            row, (static, c, h, _) = int(rows[i]), engine.static[k]
+            row, static = int(rows[i]), engine.static[k][0]
             if (row, static) in asked:   # one body of many boxes (a rail along an arc): asked once
                 continue
             asked.add((row, static))

@@ -27,7 +27,7 @@ from hub.physics.triggers import Latch, VolumeTriggers
 from hub.physics.watch import Watch
 
 with quiet_stderr():
-    import pybullet   # also the name benchmarks time the engine's step by (tests/bench_bottling.py)
+    import pybullet  # also the name benchmarks time the engine's step by (tests/bench_bottling.py)
 
 _log = logging.getLogger(__name__)
 

@@ -71,7 +71,7 @@ class Recorded:
     notes: list[str] = field(default_factory=list)
 
     @classmethod
-    def read(cls, folder: Path) -> "Recorded":
+    def read(cls, folder: Path) -> Recorded:
         folder = Path(folder)
         notes: list[str] = []
         times, columns = _recording(folder / RECORDING, notes)

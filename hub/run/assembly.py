@@ -11,9 +11,9 @@ from hub.logic.watchdog import WATCHDOG
 from hub.run.bus_link import BusLink
 from hub.run.checkpoint import Checkpointer
 from hub.run.checkpoint import apply as put_back
-from hub.run.interruption import Interruption
 from hub.run.ending import ending
 from hub.run.hold import Hold
+from hub.run.interruption import Interruption
 from hub.run.master import Master, RunResult
 from hub.run.plant import Plant
 from hub.run.recorder import Recorder
@@ -91,14 +91,14 @@ class Run:
                 schedule = FaultSchedule(plant, scenario.faults, scheduled)
                 manipulators = [schedule, scheduled]
             self.contributed = _contributions(scenario, plant)
-            from hub.run.exercise import FaultsFigure, Score   # the faults that began, the exercise's score
+            from hub.run.exercise import FaultsFigure, Score  # the faults that began, the exercise's score
             if scenario.faults:   # in the summary, and in a checkpoint
                 self.contributed += [FaultsFigure(self.faults, rate), FaultsState(self.faults, schedule)]
             if scenario.exercise is not None:
                 self.contributed.append(Score(scenario.exercise, self.contributed, self.faults, rate))
             self.bodies = None   # the body recording, for playback (run.record_bodies)
             if self.out is not None and scenario.run.record_bodies:
-                from hub.view.bodies_file import BodyRecorder   # pyarrow is loaded only for it
+                from hub.view.bodies_file import BodyRecorder  # pyarrow is loaded only for it
                 from hub.view.scene import scene_bytes
                 self.bodies = BodyRecorder(self.out, plant.world, scene_bytes(plant, scenario.name),
                                            every=scenario.run.record_bodies, looks=self.contributed)

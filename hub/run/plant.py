@@ -2,14 +2,14 @@
 from __future__ import annotations
 
 from hub.core.component import Component
-from hub.scenario.expectations import Expectation
 from hub.core.flow import Flow
-from hub.run.algorithms import GaussSeidel, Jacobi
 from hub.core.module import DynamicObject
-from hub.physics import PhysicsWorld
-from hub.scenario.checker import Scenario
 from hub.core.signals import Signals
 from hub.core.slots import Direction, SlotRef
+from hub.physics import PhysicsWorld
+from hub.run.algorithms import GaussSeidel, Jacobi
+from hub.scenario.checker import Scenario
+from hub.scenario.expectations import Expectation
 
 
 class Plant:

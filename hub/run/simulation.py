@@ -2,8 +2,8 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from hub.core.errors import PlanthubError
 from hub.core.registry import did_you_mean
@@ -84,7 +84,7 @@ class Simulation:
         end = None if until is None else round(until * self.scenario.run.physics_rate)
         return self._run.run(end)
 
-    def run_until(self, condition: Callable[["Simulation"], bool], timeout: float) -> bool:
+    def run_until(self, condition: Callable[[Simulation], bool], timeout: float) -> bool:
         """Step until `condition(sim)` holds at a communication point (True) or `timeout`
         simulated seconds have passed (False)."""
         limit = self.master.tick + round(timeout * self.scenario.run.physics_rate)

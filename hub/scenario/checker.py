@@ -4,26 +4,26 @@ from __future__ import annotations
 import json
 import math
 import re
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 
 import jsonschema
 
+from hub.bus.settings import BusSettings
+from hub.bus.tls import TlsSettings
+from hub.bus.tls import problems as tls_problems
 from hub.core import flowgraph
 from hub.core.errors import Problem, ScenarioError
-from hub.core.resources import SCHEMAS
-from hub.scenario.expectations import Expectation, NoJam
-from hub.scenario.exercise import check_exercise
-from hub.scenario.faults import check_faults
 from hub.core.flow import Condition, Mode
 from hub.core.logic_spec import OPTIONS as LOGIC_OPTIONS
 from hub.core.logic_spec import fmu_parameters
 from hub.core.module import Module
 from hub.core.registry import Registry, UnknownModule, default_registry, did_you_mean
+from hub.core.resources import SCHEMAS
 from hub.core.slots import Direction, Slot, SlotRef, SlotType
-from hub.bus.settings import BusSettings
-from hub.bus.tls import TlsSettings
-from hub.bus.tls import problems as tls_problems
+from hub.scenario.exercise import check_exercise
+from hub.scenario.expectations import Expectation, NoJam
+from hub.scenario.faults import check_faults
 from hub.scenario.model import FlowSpec, ObjectSpec, RunSettings, Scenario, is_plant  # noqa: F401 (re-exported)
 from hub.scenario.yamlsource import Lines, format_path, line_of, load_yaml
 

@@ -142,7 +142,7 @@ class BodyRecording:
     def message(self, i: int, rate: int) -> dict:
         tick = int(self.ticks[i])
         out = {"tick": tick, "time": tick / rate}
-        for name, kind in _LISTS.items():
+        for name in _LISTS:
             values = self._columns[name][i].values
             if name == "destinations":
                 out[name] = values.to_pylist()

@@ -63,7 +63,7 @@ class Browser:
                 if self._bodies is not None and not self.closing:
                     payload, self._bodies = self._bodies, None
                     await asyncio.wait_for(socket.send_bytes(payload), SEND_TIMEOUT)
-        except asyncio.TimeoutError:
+        except TimeoutError:
             self._give_up(f"a frame took more than {SEND_TIMEOUT:g} s to go out")
         except (ConnectionError, RuntimeError):
             self.closing = True   # the browser went away (aiohttp raises these on a closed socket)

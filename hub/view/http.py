@@ -41,7 +41,7 @@ def missing_bundle(bundle: Path) -> str | None:
 
 def application(view, bundle: Path = BUNDLE, *, loopback: bool = True) -> web.Application:
     """The web application of `view` (hub/view/server.py's View), its front-end read from `bundle`."""
-    import pybullet_data   # a folder of robot and mesh files: the URDF the scene names (no pybullet call)
+    import pybullet_data  # a folder of robot and mesh files: the URDF the scene names (no pybullet call)
 
     data = Path(pybullet_data.getDataPath())
     app = web.Application()

@@ -9,10 +9,10 @@ from __future__ import annotations
 import uuid
 
 from hub.bus import wire
-from hub.bus.tls import common_name
 from hub.bus.commands import command_message
 from hub.bus.session import Bus, Message
 from hub.bus.settings import BusSettings
+from hub.bus.tls import common_name
 from hub.core.errors import PlanthubError
 from hub.core.slots import SlotType
 from hub.view.scene import read_scene

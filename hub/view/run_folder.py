@@ -82,7 +82,7 @@ class EventLog:
         self.rows = rows
 
     @classmethod
-    def read(cls, path: Path, notes: list[str]) -> "EventLog":
+    def read(cls, path: Path, notes: list[str]) -> EventLog:
         if not path.is_file():
             notes.append(f"no {path}: the event log stays empty")
             return cls(np.zeros(0, np.int64), [])
@@ -124,7 +124,7 @@ class Recording:
         self.names = list(columns)
 
     @classmethod
-    def read(cls, path: Path, rate: int, notes: list[str]) -> "Recording":
+    def read(cls, path: Path, rate: int, notes: list[str]) -> Recording:
         if not path.is_file():
             notes.append(f"no {path}: no recorded slots to plot")
             return cls(np.zeros(0, np.int64), {})

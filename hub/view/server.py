@@ -21,8 +21,8 @@ from hub.core.errors import PlanthubError
 from hub.view import frames
 from hub.view.bridge import Bridge
 from hub.view.browser import close_browsers
-from hub.view.scene import refusal
 from hub.view.relay import SPEEDS_PERIOD, Relay, ViewError, slot_sample
+from hub.view.scene import refusal
 
 _log = logging.getLogger("planthub.view")
 

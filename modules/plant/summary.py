@@ -5,14 +5,13 @@ import math
 import time
 from dataclasses import dataclass
 
+from hub.physics.world import PARKED
 from modules.belt import BeltDrive
 from modules.gate import Holders, TwoPositions
-from modules.sink import Bin
-from modules.source import Store
-
 from modules.plant.jams import Jam, JamWatch
 from modules.plant.report import NO_DESTINATION, plant_lines  # noqa: F401 (NO_DESTINATION: part of the summary's API)
-from hub.physics.world import PARKED
+from modules.sink import Bin
+from modules.source import Store
 
 BUSY = 0.9           # the line is full while it holds at least this share of the most bottles seen on it
 

@@ -1,6 +1,6 @@
 """Shared by the Petri-net tests: nets by name, and one runner interface over the interpreter and the FMUs."""
 
-from functools import lru_cache
+from functools import cache
 
 from fmpy.fmi1 import FMICallException
 
@@ -19,7 +19,7 @@ PLANT_NETS = tuple(net_name(path) for path in net_files(PLANT_NETS_DIR))
 TEST_NETS = tuple(net_name(path) for path in net_files(TEST_NETS_DIR))
 
 
-@lru_cache(maxsize=None)
+@cache
 def load(name):
     """The Net called name, from fmus/nets or tests/fmus/nets."""
     for path in net_files(PLANT_NETS_DIR) + net_files(TEST_NETS_DIR):

@@ -172,7 +172,7 @@ class Checker:
     def close(self, reason: str) -> None:
         """The series stay readable."""
 
-    def series(self) -> "Series | Extremes":
+    def series(self) -> Series | Extremes:
         if not self.keep:
             return self._extremes
         data = np.array(self._rows, float).reshape(-1, len(COLUMNS))

@@ -4,8 +4,11 @@
 
 `make stability` holds it for 10 minutes. The bounds and what they were set from: tests/hard/cases.py, JAM_*.
 """
+import pytest
+
 from . import cases
 
 
+@pytest.mark.slow
 def test_a_jam_of_100_bottles_at_a_closed_stopper_holds_still_and_gains_no_energy(tmp_path):
     cases.jam(tmp_path, cases.JAM_SECONDS_SHORT).check()

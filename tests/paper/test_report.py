@@ -1,5 +1,4 @@
 """`python -m hub report paper` writes the numbers beside the paper's; plots only where matplotlib is."""
-import pytest
 
 from hub.cli.main import main
 from hub.reports.paper_report import write

@@ -59,8 +59,9 @@ def test_chained_regions_hand_over_at_one_point():
     fields = field_with(first, second)
     seam = np.array([[first.end.x, first.end.y, 0.05]])
     direction = np.array(first.end.direction)
-    before = seam.copy(); before[0, :2] -= 1e-9 * direction
-    after = seam.copy(); after[0, :2] += 1e-9 * direction
+    before, after = seam.copy(), seam.copy()
+    before[0, :2] -= 1e-9 * direction
+    after[0, :2] += 1e-9 * direction
     assert fields.locate(before)[0].tolist() == [0]
     assert fields.locate(after)[0].tolist() == [1]
 

@@ -1,5 +1,5 @@
 """The belt_drive FMU's logic as a PythonFMU class: a third-party FMU (FMI 2.0, exported by PythonFMU)."""
-from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Boolean, Real
+from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 
 
 class belt_drive_py(Fmi2Slave):
