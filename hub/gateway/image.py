@@ -3,7 +3,8 @@ lockstep handshake: the plant holds at a scan until the PLC writes the scan's nu
 
 The plant side (the participant, in the serve loop's thread) puts the PLC's inputs and takes its
 outputs; the protocol side (the server's event-loop thread) reads the inputs and writes the outputs.
-One lock guards both; a condition wakes the plant when the PLC answers. Every wait has a limit.
+One lock guards both; a condition wakes the plant when the PLC writes a handshake tag (only those
+are waited on). Every wait has a limit.
 """
 from __future__ import annotations
 
@@ -27,6 +28,10 @@ class ProcessImage:
         self.refused = 0                       # writes the server refused (each logged)
         self._lock = threading.Condition()
         self._edges = {t.slot: False for t in tags.outputs if t.type is SlotType.VOID}
+        # A PLC writes a scan's commands one tag after another (11 for the bottling plant): waking the
+        # waiting plant at each of them only to find cycle_done unchanged held the server's thread up
+        # at the GIL; the plant waits on handshake tags alone, so only they wake it.
+        self._wakers = frozenset(t.slot for t in tags.tags if t.handshake)
 
     # --- the protocol side
     def read(self, slot: str):
@@ -37,7 +42,8 @@ class ProcessImage:
         """A write of the PLC's that the server accepted (it checked it with Tag.check_written)."""
         with self._lock:
             self.values[slot] = value
-            self._lock.notify_all()
+            if slot in self._wakers:
+                self._lock.notify_all()
 
     def refuse(self, where: str, why: str) -> None:
         with self._lock:
@@ -72,7 +78,8 @@ class ProcessImage:
             return out
 
     def wait(self, until, limit: float, what: str) -> None:
-        """Wait until `until(values)` holds, at most `limit` s; a PlanthubError names `what` otherwise."""
+        """Wait until `until(values)` holds, at most `limit` s; a PlanthubError names `what` otherwise.
+        `until` reads handshake tags only (`plc_ready`, `cycle_done`): a write of another wakes no one."""
         deadline = time.monotonic() + limit
         with self._lock:
             while not until(self.values):
