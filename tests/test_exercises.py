@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from xml.etree import ElementTree
 
+import pytest
+
 from hub.scenario.yamlsource import load_yaml
 
 from .helpers import ROOT, planthub
@@ -27,6 +29,7 @@ def test_the_reader_exercise_is_the_bottling_plant_with_the_readers_occupied_wir
         {k: v for k, v in plant["run"].items() if k not in ("duration", "orders")}
 
 
+@pytest.mark.slow
 def test_tracking_bottles_from_reader_to_reader_scores_full_marks(tmp_path, capsys):
     code, out, _ = planthub(capsys, "test", READER, "--junit", tmp_path / "ref.xml")
     assert code == 0, out
@@ -34,6 +37,7 @@ def test_tracking_bottles_from_reader_to_reader_scores_full_marks(tmp_path, caps
     assert ElementTree.parse(tmp_path / "ref.xml").getroot().get("failures") == "0"
 
 
+@pytest.mark.slow
 def test_routing_on_reads_only_misroutes_once_r3_reads_nothing(tmp_path, capsys):
     code, out, _ = planthub(capsys, "test", READER, "--set", NAIVE)
     assert code == 1
@@ -56,6 +60,7 @@ def test_the_separator_exercise_is_the_bottling_plant_with_b327_passed_through_c
         {k: v for k, v in plant["run"].items() if k not in ("duration", "orders")}
 
 
+@pytest.mark.slow
 def test_a_stuck_sensor_taken_as_stuck_keeps_the_separator_going(capsys):
     """B327 sticks on at 47.96 s (drawn from seed 0 in [38, 48] s)."""
     code, out, _ = planthub(capsys, "test", SEPARATOR)
@@ -63,6 +68,7 @@ def test_a_stuck_sensor_taken_as_stuck_keeps_the_separator_going(capsys):
     assert "  ✓ the score — 100 % (5 of 5 points): passed (passes at 100 %)" in out.splitlines()
 
 
+@pytest.mark.slow
 def test_a_stuck_sensor_passed_on_holds_the_separator_shut(capsys):
     code, out, _ = planthub(capsys, "test", SEPARATOR, "--set", NAIVE_SEPARATOR)
     assert code == 1
