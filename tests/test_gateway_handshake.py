@@ -39,7 +39,7 @@ def test_a_plc_that_never_sets_plc_ready_is_named_with_the_endpoint_before_the_h
     said = proc.stdout + proc.stderr
     assert proc.returncode == 1 and "Traceback" not in said
     assert "participant 'plc': its process exited with code 1 before it could join" in said
-    assert (f"no PLC set plc_ready within" in said and
+    assert ("no PLC set plc_ready within" in said and
             f"(plc_ready is M0.0 of the s7 server at {endpoint}); the PLC sets it once it runs" in said)
     assert "no PLC set plc_ready" in (tmp_path / "run" / "plc.log").read_text()   # kept in the run folder
 

@@ -116,7 +116,7 @@ class _CheckedWrites(AttributeService):
         super().__init__(aspace)
         self.image, self.tags = image, tags
 
-    async def write(self, params, user=User(role=UserRole.Admin)):
+    async def write(self, params, user=User(role=UserRole.Admin)):   # noqa: B008 (asyncua's own signature)
         results, passed = [], []
         for k, item in enumerate(params.NodesToWrite):
             tag = self.tags.get(item.NodeId)

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 from hub.bus.participant import Participant
 from hub.core.slots import SlotType
-from hub.gateway.image import ProcessImage
 from hub.gateway.tags import TagMap
 
 LOCKSTEP, LIVE = "lockstep", "live"

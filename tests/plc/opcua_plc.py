@@ -21,7 +21,7 @@ async def main(args) -> int:
         try:
             await client.connect()
             break
-        except (OSError, asyncio.TimeoutError):
+        except (TimeoutError, OSError):
             if time.monotonic() > deadline:
                 print(f"no OPC UA server at {args.endpoint} within {args.limit:g} s", file=sys.stderr)
                 return 1
@@ -52,7 +52,7 @@ async def main(args) -> int:
             last, scans = cycle, scans + 1
         print(f"gave up after {args.limit:g} s", file=sys.stderr)
         return 1
-    except (ConnectionError, OSError, asyncio.TimeoutError, ua.UaError, asyncio.CancelledError):
+    except (TimeoutError, ConnectionError, OSError, ua.UaError, asyncio.CancelledError):
         pass   # the gateway stopped with the run
     finally:
         print(f"scans {scans} decisions {routing.decisions}")
