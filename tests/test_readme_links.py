@@ -138,3 +138,21 @@ def test_readme_is_a_front_door():
     # no hand-copied benchmark figures: those are tests/README.md's, written by make bench
     figure = re.search(r".*\d\s*(µs|× real time|ms a tick|MB per).*", text)
     assert figure is None, figure.group(0)
+
+
+def test_the_scenario_format_s_examples_load(tmp_path):
+    """schemas/README.md's annotated scenario and campaign are real: each passes its checks, the
+    campaign's scenario path read from beside a scenarios/ folder as the example says."""
+    from hub.campaign.plan import load_campaign
+    from hub.scenario.checker import load_scenario
+
+    blocks = [b for b in re.findall(r"^```yaml\n(.*?)^```", (ROOT / "schemas" / "README.md").read_text(), re.S | re.M)
+              if b.startswith("planthub: 1")]
+    assert len(blocks) == 2
+    scenario, campaign = blocks
+    (tmp_path / "scenario.yaml").write_text(scenario)
+    load_scenario(tmp_path / "scenario.yaml")
+    (tmp_path / "campaigns").mkdir()
+    (tmp_path / "scenarios").symlink_to(ROOT / "scenarios")
+    (tmp_path / "campaigns" / "speeds.yaml").write_text(campaign)
+    assert len(load_campaign(tmp_path / "campaigns" / "speeds.yaml").cases) == 16
