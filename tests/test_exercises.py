@@ -1,11 +1,13 @@
 """The shipped exercises on the bottling plant: each reference routing logic scores full marks, the
-naive one fails a goal, and the plant stays scenarios/bottling_plant.yaml's."""
+naive one fails a goal, and the plant they extend is scenarios/bottling_plant.yaml but for what each
+says it changes."""
 from __future__ import annotations
 
 from xml.etree import ElementTree
 
 import pytest
 
+from hub.scenario.extends import read_document
 from hub.scenario.yamlsource import load_yaml
 
 from .helpers import ROOT, planthub
@@ -18,7 +20,7 @@ NAIVE_SEPARATOR = 'objects.control.python=[modules.plant_control, --lanes, "A,B,
 
 
 def test_the_reader_exercise_is_the_bottling_plant_with_the_readers_occupied_wired_to_control():
-    plant, exercise = load_yaml(PLANT)[0], load_yaml(READER)[0]
+    plant, exercise = load_yaml(PLANT)[0], read_document(READER)[0].data
     assert {k: v for k, v in exercise["objects"].items() if k != "control"} == \
         {k: v for k, v in plant["objects"].items() if k != "control"}
     added = [f for f in exercise["flows"] if f not in plant["flows"]]
@@ -47,7 +49,7 @@ def test_routing_on_reads_only_misroutes_once_r3_reads_nothing(tmp_path, capsys)
 
 
 def test_the_separator_exercise_is_the_bottling_plant_with_b327_passed_through_control():
-    plant, exercise = load_yaml(PLANT)[0], load_yaml(SEPARATOR)[0]
+    plant, exercise = load_yaml(PLANT)[0], read_document(SEPARATOR)[0].data
     assert {k: v for k, v in exercise["objects"].items() if k != "control"} == \
         {k: v for k, v in plant["objects"].items() if k != "control"}
     assert [f for f in plant["flows"] if f not in exercise["flows"]] == [

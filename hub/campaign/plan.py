@@ -13,6 +13,7 @@ from hub.core.registry import did_you_mean
 from hub.core.resources import SCHEMAS
 from hub.run import checkpoint
 from hub.scenario.checker import load_scenario
+from hub.scenario.extends import read_document
 from hub.scenario.yamlsource import line_of, load_yaml
 
 DEFAULT_TIME_LIMIT = 600.0   # s: the schema's default; no case waits without a limit
@@ -145,8 +146,8 @@ class _Checker:
             if not scenario.is_file():
                 self.problem(("scenarios", n), f"no scenario file {entry!r} (looked for {scenario})")
                 continue
-            own, _, _ = load_yaml(scenario)
-            own_expect = own.get("expect", []) if isinstance(own, dict) else []
+            own, _ = read_document(scenario)
+            own_expect = own.data.get("expect", []) if own is not None and isinstance(own.data, dict) else []
             for combo in combos:
                 for seed in seeds or [None]:
                     parameters = tuple(combo) + ((("run.seed", seed),) if seed is not None else ())

@@ -23,9 +23,10 @@ from hub.core.resources import SCHEMAS
 from hub.core.slots import Direction, Slot, SlotRef, SlotType
 from hub.scenario.exercise import check_exercise
 from hub.scenario.expectations import Expectation, NoJam
+from hub.scenario.extends import read_document
 from hub.scenario.faults import check_faults
 from hub.scenario.model import FlowSpec, ObjectSpec, RunSettings, Scenario, is_plant  # noqa: F401 (re-exported)
-from hub.scenario.yamlsource import Lines, format_path, line_of, load_yaml
+from hub.scenario.yamlsource import Lines, format_path, line_of
 
 _SLOT_REF = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*){1,2}$")
 
@@ -48,12 +49,13 @@ def load_scenario(path, overrides: dict | None = None, registry: Registry | None
     `blame`: problems of an overridden value are placed at `--set`; a caller that places them
     itself (a campaign, at its own lines) reads them at the file's lines they replaced."""
     path = Path(path)
-    data, lines, problems = load_yaml(path)
-    if data is None:
+    document, problems = read_document(path)
+    if document is None:
         raise ScenarioError(problems)
+    data, lines = document.data, document.lines
     problems += _apply_overrides(data, overrides or {}, str(path))
-    problems += _unfit_numbers(data, (), lines, str(path))
-    checker = _Checker(path, data, lines, registry or default_registry())
+    problems += _unfit_numbers(data, (), lines, document.file_at)
+    checker = _Checker(path, data, lines, registry or default_registry(), document.file_at)
     # A value given with --set is blamed on --set, not on the line of the file it replaced.
     checker.overridden = set(overrides or {}) if blame else set()
     checker.problems[:0] = [checker.blamed(p) for p in problems]
@@ -68,7 +70,7 @@ def load_scenario(path, overrides: dict | None = None, registry: Registry | None
 LARGEST = 2 ** 53
 
 
-def _unfit_numbers(node, path: tuple, lines: Lines, file: str) -> list[Problem]:
+def _unfit_numbers(node, path: tuple, lines: Lines, file_at) -> list[Problem]:
     """Every NaN, infinity or number beyond ±LARGEST in the document, reported at its place and
     replaced by None: no number of a scenario may be non-finite (JSON Schema's `number` would
     take them) or out of that range."""
@@ -81,10 +83,11 @@ def _unfit_numbers(node, path: tuple, lines: Lines, file: str) -> list[Problem]:
         elif isinstance(value, (int, float)) and not isinstance(value, bool) and abs(value) > LARGEST:
             message = f"{value!r} is out of range: a scenario's numbers stay within ±2**53 (about 9.0e15)"
         if message is not None:
-            found.append(Problem(file, line_of(lines, path + (key,)), format_path(path + (key,)), message))
+            found.append(Problem(file_at(path + (key,)), line_of(lines, path + (key,)), format_path(path + (key,)),
+                                 message))
             node[key] = None
         elif isinstance(value, (dict, list)):
-            found += _unfit_numbers(value, path + (key,), lines, file)
+            found += _unfit_numbers(value, path + (key,), lines, file_at)
     return found
 
 
@@ -137,10 +140,13 @@ def _bus_settings(bus: dict, base: Path) -> BusSettings:
     if isinstance(access, dict) and isinstance(access.get("control"), list):
         control = tuple(x for x in access["control"] if isinstance(x, str))
     watch = tuple(x for x in access.get("watch", ()) if isinstance(x, str)) if isinstance(access, dict) else ()
+    instructor = tuple(x for x in access.get("instructor", ()) if isinstance(x, str)) if isinstance(access, dict) \
+        else ()
     return BusSettings(get("mode", str), strings("listen"), strings("connect"), get("scouting", bool),
                        float(get("lease", (int, float))), get("on_loss", str),
                        float(get("publish_period", (int, float))), strings("expose"), tls=tls,
-                       control=control, publish=get("publish", str), watch=watch)
+                       control=control, publish=get("publish", str), watch=watch,
+                       instructor=instructor)
 
 
 def _replaced(schema: dict, key: str, value) -> str | None:
@@ -160,8 +166,10 @@ def _scenario_schema() -> dict:
 class _Checker:
     """Collects every problem of one scenario, each with file, line and path."""
 
-    def __init__(self, path: Path, data, lines: Lines, registry: Registry):
+    def __init__(self, path: Path, data, lines: Lines, registry: Registry, file_at=None):
         self.file = str(path)
+        # The file each value was written in: a scenario that extends another holds the base's too.
+        self.file_at = file_at or (lambda _path: self.file)
         self.path = path
         self.data = data
         self.lines = lines
@@ -176,7 +184,7 @@ class _Checker:
         where = format_path(path)
         if any(where == s or where.startswith((s + ".", s + "[")) for s in self.settled):
             return
-        self.problems.append(self.blamed(Problem(self.file, line_of(self.lines, path), where, message)))
+        self.problems.append(self.blamed(Problem(self.file_at(path), line_of(self.lines, path), where, message)))
 
     def blamed(self, problem: Problem) -> Problem:
         """A problem at or under a value given with --set, placed there rather than in the file."""
