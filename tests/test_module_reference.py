@@ -36,3 +36,25 @@ def test_reference_takes_no_module_name(capsys, tmp_path):
     code, _, err = planthub(capsys, "describe", "conveyor", "--reference", tmp_path / "README.md")
     assert code == 2 and "--reference writes every module's reference: give no module name" in err
     assert not (tmp_path / "README.md").exists()
+
+
+def test_every_slot_a_shipped_scenario_makes_is_in_its_modules_reference():
+    """What the reference lists covers what the modules make: each slot of each object of the
+    shipped scenarios is listed by name, or its component has a family of its direction that
+    stands for it (an FMU's `<input>`, a sink's `DEST`)."""
+    from hub.core.slots import Slot
+    from hub.scenario.checker import load_scenario
+
+    unlisted = {}   # (module, component.slot (direction)) → the first scenario that makes it
+    for path in sorted((ROOT / "scenarios").rglob("*.yaml")):
+        for spec in load_scenario(path).objects:
+            reference = spec.module.reference_slots()
+            named = {(c, s.name, s.direction) for c, s in reference if isinstance(s, Slot)}
+            families = {(c, s.direction) for c, s in reference if not isinstance(s, Slot)}
+            for component, slots in spec.module.slots(spec.params).items():
+                for slot in slots:
+                    if (component, slot.name, slot.direction) not in named | {(c, slot.name, d) for c, d in families}:
+                        unlisted.setdefault(f"{spec.module_name} {component}.{slot.name} ({slot.direction.value})",
+                                            path.name)
+    assert not unlisted, "slots the modules' reference does not list: " + "; ".join(
+        f"{slot}, in {scenario}" for slot, scenario in unlisted.items())
