@@ -10,7 +10,7 @@ import time
 import pytest
 import trustme
 
-from hub.bus.session import Bus, BusError, free_loopback_endpoint
+from hub.bus.session import Bus, BusError, free_loopback_endpoint, wait_until
 from hub.bus.settings import BusSettings
 from hub.bus.tls import TlsSettings
 from hub.core.errors import ScenarioError, SimulationError
@@ -137,8 +137,8 @@ def test_an_operator_command_goes_over_tls(certs, tmp_path):
     assert master.stopped_by.startswith("stopped by an operator")
 
 
-def hub_settings(certs, control=None, watch=()) -> BusSettings:
-    return BusSettings(listen=(tls_endpoint(),), control=control, watch=watch, tls=TlsSettings(
+def hub_settings(certs, control=None, watch=(), instructor=()) -> BusSettings:
+    return BusSettings(listen=(tls_endpoint(),), control=control, watch=watch, instructor=instructor, tls=TlsSettings(
         str(certs / "ca.pem"), str(certs / "hub.pem"), str(certs / "hub.key"), mutual=True))
 
 
@@ -166,6 +166,29 @@ def test_under_access_control_a_watch_role_may_watch_and_ask_rates_but_not_comma
     assert ticks == list(range(0, 901, 15))   # every 0.1 s: the rate it asked for, to the last point
     assert not master.stopped_by
     assert not (tmp_path / "commands.csv").exists()
+
+
+def test_under_access_control_only_an_instructor_reaches_the_instructors_key(certs, tmp_path):
+    """A controller's fault on the instructor's key is dropped by Zenoh (no answer, nothing recorded);
+    an instructor's — a name in access.instructor, not in control — is applied and answered."""
+    from hub.core.errors import PlanthubError
+    from hub.live import Viewer
+
+    slow = {"name": "slow", "kind": "belt_failure", "speed": 0.5}
+    with Bus(hub_settings(certs, control=("plc",), instructor=("hmi",))) as bus, \
+            hub(BELT_FMU, tmp_path, bus=bus) as master, \
+            Viewer("belt_ramp_fmu", bus.endpoints, tls=own(certs, "plc")) as plc, \
+            Viewer("belt_ramp_fmu", bus.endpoints, tls=own(certs, "hmi")) as teacher:
+        master.start()
+        dropped = plc.command("fault", "belt.drive", {**slow, "name": "plc's"}, wait=None, instructor=True)
+        applied = teacher.command("fault", "belt.drive", slow, by="teacher", wait=None, instructor=True)
+        assert wait_until(master.commands.pending, 5.0)
+        master.run()
+        assert teacher.answer(applied, 5.0)["ok"] is True
+        with pytest.raises(PlanthubError, match="no answer to command"):
+            plc.answer(dropped, 0.5)
+    assert [line.split(",")[2:4] for line in (tmp_path / "commands.csv").read_text().splitlines()[1:]] == [
+        ["fault", "belt.drive"]]
 
 
 def test_under_access_control_a_control_role_may_watch_too(certs, tmp_path):
@@ -464,7 +487,8 @@ def test_the_scene_says_who_may_command_and_a_watch_only_view_is_told_why(certs)
                                                     "access": {"control": ["plc"], "watch": ["hmi"]}}})
     with Plant(scenario) as plant:
         scene = scene_document(plant, "belt_ramp_fmu")
-    assert scene["access"] == {"control": ["plc", "hub"], "watch": ["hmi"]}, "the hub's own name controls too"
+    assert scene["access"] == {"control": ["plc", "hub"], "watch": ["hmi"], "instructor": ["hub"]}, \
+        "the hub's own name controls (and instructs) too"
     assert refusal(scene, common_name(str(certs / "plc.pem"))) is None
     assert refusal(scene, common_name(str(certs / "hmi.pem"))) == (
         "this view's certificate names 'hmi', which may only watch this run (run.bus.access.control: plc, hub)")

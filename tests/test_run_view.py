@@ -55,7 +55,7 @@ def test_the_run_serves_its_view_and_the_view_ends_with_the_run(tmp_path):
         url, pid = started_view(started)
         hello = talk(url, receive)
         assert hello == {"type": "hello", "run": "source_sink", "control": True, "reason": "",
-                         "viewer": hello["viewer"]} and hello["viewer"].startswith("view-")
+                         "viewer": hello["viewer"], "role": "instructor", "role_reason": ""} and hello["viewer"].startswith("view-")
         assert started.proc.wait(60) == 0, started.output()
     assert gone(pid), f"the view (pid {pid}) outlived its run"
     out, err = started.output()

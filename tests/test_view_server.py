@@ -36,7 +36,8 @@ def plant(tmp_path_factory):
 async def greeting(ws) -> dict:
     """The hello and the scene, in that order; the scene."""
     hello = await receive(ws)
-    assert hello == {"type": "hello", "run": RUN, "control": True, "reason": "", "viewer": "view-test"}
+    assert hello == {"type": "hello", "run": RUN, "control": True, "reason": "", "viewer": "view-test",
+                     "role": "instructor", "role_reason": ""}
     scene = await receive(ws)
     assert scene["type"] == "scene"
     return scene["scene"]
@@ -123,10 +124,13 @@ def test_a_browser_command_reaches_the_hub_is_recorded_and_stops_the_belts_bottl
     ("[1, 2]", "expected a JSON object with a type, got [1, 2]"),
     ('{"type": "shout"}', 'unknown type "shout": expected command, rate or playback'),
     ('{"type": "command", "op": "explode"}',
-     'unknown op "explode": expected one of set, force, release, stop, pause, resume, step, pace'),
+     'unknown op "explode": expected one of set, force, release, stop, pause, resume, step, pace, fault, repair'),
     ('{"type": "command", "op": "force", "slot": "belt", "value": false}',
      'force needs a slot object.component.slot (at most 200 characters), got "belt"'),
     ('{"type": "command", "op": "step", "value": -3}', "step takes a number of points from 1 to 100000, got -3"),
+    ('{"type": "command", "op": "fault", "slot": "belt.drive.run", "value": {"name": "x"}}',
+     'fault needs the part it acts on, object.component (at most 200 characters), got "belt.drive.run"'),
+    ('{"type": "command", "op": "repair", "value": "x"}', 'repair takes a map with the fault\'s name, got "x"'),
     ('{"type": "command", "op": "pace", "value": NaN}', "not JSON: NaN is not a JSON number"),
     ('{"type": "rate", "period": "fast"}',
      'rate takes a period in s, more than 0 and at most 3600, or null; got "fast"'),
@@ -296,7 +300,7 @@ def test_a_view_that_only_watches_says_why_and_sends_no_command(plant, tmp_path)
 
         hello, refused = talk(watching, conversation)
     assert hello == {"type": "hello", "run": RUN, "control": False, "viewer": "view-watch",
-                     "reason": "it was started with --no-control"}
+                     "reason": "it was started with --no-control", "role": "instructor", "role_reason": ""}
     assert refused == {"type": "error", "op": "stop", "slot": "", "ref": "s",
                        "error": "this view only watches (it was started with --no-control): the command was not sent"}
     assert plant[3].proc.poll() is None

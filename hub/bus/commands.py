@@ -13,7 +13,10 @@ point, recorded with its tick in `commands.csv`, and replayed from there bit for
 - `fault`, `repair`: a fault begins or ends (hub/scenario/faults.py; the scenario's `faults:`,
   put in by their schedule, hub/run/faults.py). Its value is the fault as a map (name, kind and
   its parameters), its slot the part it acts on. Recorded like the others, so a replay applies
-  the same faults at the same points without scheduling them again.
+  the same faults at the same points without scheduling them again. Live, they come only on the
+  instructor's key `plant/<run>/@instructor/command` (answered on `…/command/result` there):
+  under access control only the names in run.bus.access.instructor may put there, and a
+  trainee watching the run sees neither the command nor its answer.
 - `checkpoint`: the run is saved at the next point into its folder's `checkpoints/TICK.ckpt`
   (hub/run/checkpoint.py). Like the run's control it changes nothing the run computes: recorded
   and noted, and a replay goes past it.
@@ -110,8 +113,10 @@ class Commands:
     # --- sources of commands -------------------------------------------------------------
     def listen(self, bus: Bus, run: str) -> None:
         """Take live commands from `plant/<run>/@cosim/command`; answer on `…/command/result`."""
-        bus.subscribe(wire.control_key(run, "command"), lambda m: self._inbox.put(m.payload))
+        bus.subscribe(wire.control_key(run, "command"), lambda m: self._inbox.put((m.payload, False)))
+        bus.subscribe(wire.instructor_key(run, "command"), lambda m: self._inbox.put((m.payload, True)))
         self._results = bus.publisher(wire.control_key(run, "command", "result"), wire.MSGPACK)
+        self._instructor_results = bus.publisher(wire.instructor_key(run, "command", "result"), wire.MSGPACK)
 
     def parse(self, message) -> Command:
         """A command message (a map: op, slot, value, by) → a checked Command, or CommandError."""
@@ -237,9 +242,13 @@ class Commands:
         """The live commands waiting in the inbox (after those in `first`), checked and answered
         (a refused one only answered)."""
         due = []
-        for payload in [*first, *self._inbox.drain()]:
+        for payload, instructor in [*first, *self._inbox.drain()]:
             try:
                 command = self.parse(wire.unpack(payload))
+                if command.op in FAULTS and not instructor:
+                    raise CommandError(f"{command.op}: faults are an instructor's: put it on "
+                                       "plant/<run>/@instructor/command (under run.bus.access, with a certificate "
+                                       "named in access.instructor)")
                 if command.op in CONTROL:
                     refused = (self.control.refuse(command) if self.control is not None else
                                "this run has no control of its points (a replay, or no live commands)")
@@ -249,10 +258,10 @@ class Commands:
                     raise CommandError("checkpoint: this run has no folder to write checkpoints into "
                                        "(planthub run --out)")
             except (CommandError, wire.WireError) as exc:
-                self._answer(payload, tick, str(exc))
+                self._answer(payload, tick, str(exc), instructor)
                 continue
             due.append(command)
-            self._answer(payload, tick, None)
+            self._answer(payload, tick, None, instructor)
         return due
 
     def wait(self, tick: int, timeout: float) -> None:
@@ -275,7 +284,7 @@ class Commands:
         self.recorder.command(tick, command.op, "", command.value_text(None), command.by)
         self.recorder.notice(tick, f"{command.describe(None)} ({what})")
 
-    def _answer(self, payload: bytes, tick: int, error: str | None) -> None:
+    def _answer(self, payload: bytes, tick: int, error: str | None, instructor: bool = False) -> None:
         if self._results is None:
             return
         try:
@@ -284,7 +293,8 @@ class Commands:
                 ident = ""   # echoed to everyone: only an id of the form wire.md gives
         except (wire.WireError, AttributeError):
             ident = ""
-        self._results.put(wire.pack({"id": ident, "ok": error is None, "tick": tick, "error": error or ""}))
+        results = self._instructor_results if instructor else self._results
+        results.put(wire.pack({"id": ident, "ok": error is None, "tick": tick, "error": error or ""}))
 
     def apply(self, signals, direction: Direction) -> None:
         """Write the commanded values of this direction's slots (sources after sensing, targets after flows).

@@ -41,6 +41,8 @@ class Viewer:
             self.bus.watch_tokens(wire.hub_token(run), lambda m: self._control.put(("hub", m.alive)))
             self.bus.subscribe(wire.control_key(run, "command", "result"),
                                lambda m: self._control.put(("result", m.payload)))
+            self.bus.subscribe(wire.instructor_key(run, "command", "result"),   # a fault's, an instructor's
+                               lambda m: self._control.put(("result", m.payload)))
             self.bus.subscribe(wire.control_key(run, "state"), lambda m: self._control.put(("state", m.payload)))
             self.bus.declare_token(wire.control_key(run, "viewer", self.id))
         except BaseException:
@@ -87,12 +89,15 @@ class Viewer:
             self._handle(self._control.get(min(left, 0.1)))
         return self.state
 
-    def command(self, op: str, slot: str = "", value=None, *, by: str = "", wait: float | None = 5.0):
+    def command(self, op: str, slot: str = "", value=None, *, by: str = "", wait: float | None = 5.0,
+                instructor: bool = False):
         """Send a command. With `wait` (s), return the hub's answer, a map {id, ok, tick, error}, once the
-        command was applied or refused at a communication point; without, return its id (see `answer`)."""
+        command was applied or refused at a communication point; without, return its id (see `answer`).
+        `instructor`: on the instructor's key, where a `fault` or `repair` must come from (hub/bus/commands.py)."""
         ident = uuid.uuid4().hex
         self.wait_for_hub()
-        self.bus.put(wire.control_key(self.run, "command"), command_message(op, slot, value, by, ident), wire.MSGPACK)
+        key = wire.instructor_key(self.run, "command") if instructor else wire.control_key(self.run, "command")
+        self.bus.put(key, command_message(op, slot, value, by, ident), wire.MSGPACK)
         return ident if wait is None else self.answer(ident, wait)
 
     def answer(self, ident: str, timeout: float) -> dict:

@@ -104,17 +104,25 @@ _MESSAGES = ["put", "delete", "declare_subscriber", "query", "declare_queryable"
              "declare_liveliness_subscriber", "liveliness_query"]
 
 
-def _configure_access(config, control: tuple[str, ...], watch: tuple[str, ...], tls: TlsSettings) -> None:
+def _configure_access(config, control: tuple[str, ...], watch: tuple[str, ...], tls: TlsSettings,
+                      instructor: tuple[str, ...] = ()) -> None:
     """Zenoh's access control, by certificate common name. A denied message is dropped without a
-    word to its sender; hub/bus/README.md says what that looks like."""
+    word to its sender; hub/bus/README.md says what that looks like. An instructor watches, and
+    alone (with the hub's own) reaches the instructor's key, where faults are injected and shown:
+    a controller's `plant/*/@cosim/**` does not match that verbatim chunk."""
     controllers = list(dict.fromkeys(control))
     own = tls_common_name(tls.certificate) if tls.certificate else None
     if own:
         controllers = list(dict.fromkeys([*controllers, own]))   # the participants the hub launches present it
-    watchers = list(dict.fromkeys([*watch, *controllers]))
+    instructors = list(dict.fromkeys([*instructor, *([own] if own else [])]))
+    watchers = list(dict.fromkeys([*watch, *controllers, *instructor]))
     rules = [{"id": "watch", "permission": "allow", "messages": _MESSAGES, "key_exprs": _WATCH_KEYS},
-             {"id": "control", "permission": "allow", "messages": _MESSAGES, "key_exprs": ["plant/*/@cosim/**"]}]
+             {"id": "control", "permission": "allow", "messages": _MESSAGES, "key_exprs": ["plant/*/@cosim/**"]},
+             {"id": "instruct", "permission": "allow", "messages": _MESSAGES, "key_exprs": ["plant/*/@instructor/**"]}]
     subjects, policies = [], []
+    if instructors:
+        subjects.append({"id": "instructors", "cert_common_names": instructors})
+        policies.append({"rules": ["instruct"], "subjects": ["instructors"]})
     if watchers:
         subjects.append({"id": "watchers", "cert_common_names": watchers})
         policies.append({"rules": ["watch"], "subjects": ["watchers"]})
@@ -166,7 +174,7 @@ class Bus:
             if tls is not None:
                 _configure_tls(config, tls)
             if settings.control is not None:
-                _configure_access(config, settings.control, settings.watch, tls)
+                _configure_access(config, settings.control, settings.watch, tls, settings.instructor)
             zenoh_log.start()
             self._session = zenoh.open(config)
         except zenoh.ZError as exc:

@@ -25,6 +25,8 @@ class BusSettings:
     watch: tuple[str, ...] = ()          # access control: the common names that may also watch (data plane,
                                          # run state, rate requests); the control names may anyway
     publish: str = "every"               # every | change: a data-plane slot goes out at each due point, or when changed
+    instructor: tuple[str, ...] = ()     # access control: the common names that may also see and inject faults
+                                         # (the instructor's key, plant/<run>/@instructor/**), and watch
 
 
 def exposure(settings: BusSettings) -> list[str]:

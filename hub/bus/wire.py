@@ -46,6 +46,13 @@ def control_key(run: str, *parts: str) -> str:
     return "/".join(("plant", run, "@cosim") + parts)
 
 
+def instructor_key(run: str, *parts: str) -> str:
+    """The instructor's plane, under its own verbatim chunk `@instructor`: neither `plant/**` nor a
+    controller's `plant/*/@cosim/**` matches it, so under access control only the names in
+    run.bus.access.instructor reach it (faults: injecting them, and seeing them)."""
+    return "/".join(("plant", run, "@instructor") + parts)
+
+
 def hub_token(run: str) -> str:
     return control_key(run, "hub")
 

@@ -51,6 +51,10 @@ def add_command(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str =
                       help="this view's name on the bus, logged as the sender of its commands (default view-<random>)")
     view.add_argument("--no-control", action="store_true",
                       help="only watch: the page's operator panel is disabled and no command is sent")
+    view.add_argument("--role", choices=["instructor", "trainee"],
+                      help="instructor: the page also shows the faults and injects them; trainee: the plant and the "
+                           "exercise only (default: instructor when the run has no access control and the view "
+                           "serves this machine only, or its certificate is in run.bus.access.instructor)")
     view.add_argument("--timeout", type=float, default=30.0, metavar="S",
                       help="s to wait for the hub to answer (default 30)")
     view.add_argument("--bundle", type=Path, metavar="DIR",
@@ -125,7 +129,7 @@ def port_number(text: str) -> int:
 
 #: options that only joining a running plant takes, and their defaults (the --tls-* ones may come from
 #: the environment, so they are not checked)
-_LIVE_ONLY = {"mode": "peer", "name": None, "no_control": False, "timeout": 30.0}
+_LIVE_ONLY = {"mode": "peer", "name": None, "no_control": False, "timeout": 30.0, "role": None}
 
 
 def _view(parser, args) -> int:
@@ -162,6 +166,11 @@ def _view(parser, args) -> int:
     from hub.view.relay import Relay
     from hub.view.server import serve
 
+    role, role_reason = args.role or "instructor", "it was started with --role trainee"
+    if args.role is None and not is_loopback(args.host) and tls is None:
+        # Beyond this machine without a certificate to decide it, the page is a trainee's unless asked.
+        role, role_reason = "trainee", (f"it serves {args.host}, beyond this machine, without a certificate: "
+                                        "--role instructor to show the faults there")
     if not is_loopback(args.host):
         _log.warning("planthub view: warning: serving on %s, beyond this machine: the view has no login, so whoever "
                      "reaches that address can watch the plant and command it (--no-control: watch only)", args.host)
@@ -179,6 +188,7 @@ def _view(parser, args) -> int:
     try:
         return asyncio.run(serve(relay, host=args.host, port=args.port, bundle=args.bundle or BUNDLE,
                                  control=not args.no_control, reason="it was started with --no-control",
-                                 timeout=args.timeout, announce=announce, opened=opened))
+                                 timeout=args.timeout, announce=announce, opened=opened, role=role,
+                                 role_reason=role_reason))
     finally:
         relay.close()

@@ -75,24 +75,31 @@ class Run:
                 stops = [self.interruption, *stops]
             # Imported here: replaying needs the bus package's command parser, not a bus.
             from hub.bus.commands import Commands, load_commands
-            from hub.run.faults import FaultBook, FaultSchedule, FaultsState
+            from hub.run.faults import Board, FaultBook, FaultSchedule, FaultsState
             # Faults begin and end as commands (hub/run/faults.py): the scenario's schedule gives
             # them to a Commands of their own; a replay's recorded commands hold them instead.
             self.faults = FaultBook(plant)
-            commands = Commands(plant, self.recorder, load_commands(replay, plant, self.faults)) \
-                if replay is not None else None
+            recorded = load_commands(replay, plant, self.faults) if replay is not None else None
+            commands = Commands(plant, self.recorder, recorded) if recorded is not None else None
             self.commands = commands
             manipulators, schedule = [commands] if commands is not None else [], None
+            slaves = [s for c in plant.components if getattr(s := getattr(c, "slave", None), "on_bus", False)]
+            # A run on the bus may take live faults from an instructor: the live commands take the
+            # scheduled ones' place once the bus is joined (start), and the schedule ends a live
+            # fault given a duration.
+            live = commands is None and (bus is not None or bool(slaves))
+            self.scheduled = None
             if commands is not None:
                 self.faults.attach(commands)
-            elif scenario.faults:
-                scheduled = Commands(plant, self.recorder)
+            elif scenario.faults or live:
+                self.scheduled = scheduled = Commands(plant, self.recorder)
                 self.faults.attach(scheduled)
                 schedule = FaultSchedule(plant, scenario.faults, scheduled)
                 manipulators = [schedule, scheduled]
+            self.schedule = schedule
             self.contributed = _contributions(scenario, plant)
             from hub.run.exercise import FaultsFigure, Score  # the faults that began, the exercise's score
-            if scenario.faults:   # in the summary, and in a checkpoint
+            if scenario.faults or live or any(c.op == "fault" for _, c in recorded or ()):
                 self.contributed += [FaultsFigure(self.faults, rate), FaultsState(self.faults, schedule)]
             if scenario.exercise is not None:
                 self.contributed.append(Score(scenario.exercise, self.contributed, self.faults, rate))
@@ -102,10 +109,10 @@ class Run:
                 from hub.view.scene import scene_bytes
                 self.bodies = BodyRecorder(self.out, plant.world, scene_bytes(plant, scenario.name),
                                            every=scenario.run.record_bodies, looks=self.contributed)
-            slaves = [s for c in plant.components if getattr(s := getattr(c, "slave", None), "on_bus", False)]
             if bus is not None or slaves:
                 self.link = BusLink(plant, self.recorder, slaves, bus, commands, log=self.log,
                                     looks=self.contributed, figures=lambda: self.figures,
+                                    faults=Board(self.faults, schedule),
                                     logs=self.out)   # what launched participants said: beside the run's files
             # The scenario's expectations are watched in every run, so that a checkpoint carries
             # what they saw whichever command took it and whichever resumes it.
@@ -141,6 +148,13 @@ class Run:
                 live = self.link.start()
                 if live is not None:
                     self.commands = live
+                    if self.scheduled is not None:   # faults, scheduled and live, go through the live commands
+                        self.faults.attach(live)
+                        self.faults.timed = True
+                        self.schedule.commands = live
+                        at = self.master.manipulators.index(self.scheduled)
+                        self.master.manipulators[at:at + 1] = []
+                        self.scheduled = None
                     live.on_checkpoint = self.checkpointer.request if self.checkpointer is not None else None
                     self.master.manipulators.append(live)
                     self.master.hold = Hold(live, pacer=self.master.pacer, state=self.link.lockstep.publish_state,

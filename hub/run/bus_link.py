@@ -27,7 +27,7 @@ class BusLink:
     """
 
     def __init__(self, plant, recorder, slaves: list, bus: Bus | None = None, commands: Commands | None = None,
-                 log=None, looks=(), figures=lambda: [], logs: Path | None = None):
+                 log=None, looks=(), figures=lambda: [], logs: Path | None = None, faults=None):
         scenario = plant.scenario
         self.plant = plant
         self.recorder = recorder
@@ -38,6 +38,7 @@ class BusLink:
         self.commands = commands
         self.dataplane = self.lockstep = self.view = None
         self.looks, self.figures = looks, figures
+        self.faults = faults   # () → the instructor's board (hub/run/faults.py FaultBook.board), or None
         self.logs = logs
         self._closed = False
 
@@ -53,7 +54,7 @@ class BusLink:
         # Everything that listens is declared before the hub's liveliness token, which tells others
         # the hub is there: a put made before a subscription is known goes nowhere.
         self.dataplane = DataPlane(self.bus, run, plant, settings)
-        self.view = Broadcast(self.bus, run, plant, looks=self.looks, figures=self.figures)
+        self.view = Broadcast(self.bus, run, plant, looks=self.looks, figures=self.figures, faults=self.faults)
         live = None
         if self.commands is None:
             live = self.commands = Commands(plant, self.recorder)
@@ -84,6 +85,8 @@ class BusLink:
         self._closed = True
         try:
             try:
+                if self.view is not None:   # the final figures (an exercise's score) before the state says stopped
+                    self.view.close(reason)
                 if self.dataplane is not None:   # the last values go out before the run's state says stopped
                     self.dataplane.close()
             finally:

@@ -32,6 +32,13 @@ targets fit):
 
 Effects are applied last at their direction's step of the point, after the operator's
 forces (hub/run/master.py, steps 1 and 2).
+
+An instructor injects a fault live (`planthub view`'s instructor panel, or `fault` on the
+instructor's key): checked here as a scenario's fault is, and with `for: S` in its value it lasts
+S s (on the grid of points): the schedule then puts a `repair` in at its end, recorded like the
+fault, so a replay ends it where the live run did without timing anything itself. What the
+instructor's page shows of the faults is `board` (hub/view/broadcast.py sends it on the
+instructor's key, never where a trainee reads).
 """
 from __future__ import annotations
 
@@ -40,7 +47,9 @@ from dataclasses import dataclass
 
 from hub.bus.commands import MAX_NAME, Command, CommandError
 from hub.core.slots import Direction
-from hub.scenario.faults import KINDS, check_values, target_component
+from hub.scenario.faults import KINDS, PARAMETERS, WHAT, check_values, components, fits, on_grid, target_component
+
+MAX_FOR = 86_400.0   # s: the longest a live fault may be given to last
 
 
 @dataclass
@@ -69,6 +78,12 @@ class FaultBook:
             self._slots.setdefault((ref.obj, ref.component), {})[ref.slot] = index
         self._tables = tables
         self._owners = {(c.obj, c.name): c for c in plant.components}
+        run = plant.scenario.run
+        self.rate, self.substeps = run.physics_rate, run.substeps
+        self.timed = False     # a live run: a fault given `for` gets its repair from the schedule (`ends`)
+        self.ends: dict[str, tuple[str, int, str]] = {}   # fault → (target, end tick, by) of timed live faults
+        self.version = 0       # changes whenever a fault begins or ends (the instructor's board is sent again)
+        self._targets = None
         self.active: dict[str, _Effect] = {}
         self._ending: list[_Effect] = []   # ended at this point: their last word at the next SOURCE step
         self.log: list[Started] = []
@@ -97,13 +112,18 @@ class FaultBook:
         found, why = target_component(kind, target, self._tables)
         if found != target:
             raise CommandError(f"fault {value['name']}: {why or f'name the component: {found}'}")
-        params = {k: v for k, v in value.items() if k not in ("name", "kind")}
+        params = {k: v for k, v in value.items() if k not in ("name", "kind", "for")}
         unknown = sorted(str(k) for k in set(params) - {"value", "speed", "reads", "destination", "id"})
         problems = [f"unknown parameter {unknown[0][:80]!r}"] if unknown else _bad_types(params)
         made = None if problems else check_values(kind, params, (), lambda path, text: problems.append(text))
+        lasts = value.get("for")
+        if not problems and lasts is not None and (isinstance(lasts, bool) or not isinstance(lasts, (int, float))
+                                                   or not 0 < lasts <= MAX_FOR):
+            problems.append(f"`for` is how long it lasts, s: above 0 and at most {MAX_FOR:g}, got {str(lasts)[:80]}")
         if problems:
             raise CommandError(f"fault {value['name']}: {problems[0]}")
-        return Command("fault", target, {"name": value["name"], "kind": kind, **made}, by)
+        return Command("fault", target, {"name": value["name"], "kind": kind, **made,
+                                         **({} if lasts is None else {"for": float(lasts)})}, by)
 
     def begin(self, tick: int, command: Command) -> None:
         name = command.value["name"]
@@ -113,6 +133,11 @@ class FaultBook:
         effect = _EFFECTS[command.value["kind"]](self, obj, comp, command.value)
         self.active[name] = effect
         self.log.append(Started(name, command.value["kind"], command.slot, tick))
+        self.version += 1
+        self.ends.pop(name, None)
+        if self.timed and "for" in command.value:
+            self.ends[name] = (command.slot, tick + max(self.substeps, on_grid(command.value["for"], self.rate,
+                                                                               self.substeps)), command.by)
         effect.begin()
 
     def end(self, tick: int, command: Command) -> None:
@@ -120,6 +145,8 @@ class FaultBook:
             self._stop(tick, command.value["name"])
 
     def _stop(self, tick: int, name: str) -> None:
+        self.version += 1
+        self.ends.pop(name, None)
         effect = self.active.pop(name)
         effect.end()
         self._ending.append(effect)
@@ -148,6 +175,7 @@ class FaultBook:
         return {"active": [(name, e.target, dict(e.value), {k: getattr(e, k) for k in type(e).STATE})
                            for name, e in self.active.items()],
                 "log": [(f.name, f.kind, f.target, f.start, f.end) for f in self.log],
+                "ends": dict(self.ends),
                 "forces": None if c is None else (dict(c._forced), dict(c._own), dict(c._released))}
 
     def restore_state(self, saved: dict) -> None:
@@ -160,6 +188,8 @@ class FaultBook:
             self.active[name] = effect
         self._ending.clear()
         self.log[:] = [Started(*f) for f in saved["log"]]
+        self.ends = {name: tuple(end) for name, end in saved.get("ends", {}).items()}
+        self.version += 1
         if saved["forces"] is not None and self.commands is not None:
             for held, back in zip((self.commands._forced, self.commands._own, self.commands._released),
                                   saved["forces"]):
@@ -168,6 +198,36 @@ class FaultBook:
 
     def component(self, obj: str, comp: str):
         return self._owners[(obj, comp)]
+
+    # --- the instructor's board -----------------------------------------------------------------
+    def targets(self) -> dict[str, list[str]]:
+        """Kind → the parts a fault of that kind fits (`object.component`), what a live fault may name."""
+        if self._targets is None:
+            by_object = {obj: components(table) for obj, table in self._tables.items()}
+            self._targets = {kind: [f"{obj}.{comp}" for obj, comps in by_object.items()
+                                    for comp, slots in comps.items() if fits(kind, comp, slots)] for kind in KINDS}
+        return self._targets
+
+    def board(self, schedule=None) -> dict:
+        """What an instructor's page shows (schemas/scene.schema.json `faults_message`): each kind with
+        the parts it fits and its parameters, the scenario's faults and when, those in effect, and
+        every fault that began."""
+        rate, targets = self.rate, self.targets()
+        kinds = {kind: {"targets": targets[kind], "what": WHAT[kind], "needs": list(PARAMETERS[kind][0]),
+                        "optional": list(PARAMETERS[kind][1])} for kind in KINDS}
+        scheduled = []
+        for n, spec in enumerate(schedule.specs if schedule is not None else ()):
+            state = "pending" if n in schedule.pending else "active" if spec.name in self.active else "ended"
+            scheduled.append({"name": spec.name, "kind": spec.kind, "target": spec.target,
+                              "parameters": dict(spec.parameters), "when": spec.when(rate),
+                              "state": state})
+        active = [{"name": name, "kind": e.value["kind"], "target": e.target, "parameters":
+                   {k: v for k, v in e.value.items() if k not in ("name", "kind", "for")},
+                   "until": self.ends[name][1] / rate if name in self.ends else None}
+                  for name, e in self.active.items()]
+        started = [{"name": f.name, "kind": f.kind, "target": f.target, "start": f.start / rate,
+                    "end": None if f.end is None else f.end / rate} for f in self.log]
+        return {"kinds": kinds, "scheduled": scheduled, "active": active, "started": started}
 
 
 def _bad_types(params: dict) -> list[str]:
@@ -345,6 +405,11 @@ class FaultSchedule:
         if direction is not Direction.SOURCE:
             return
         tick = self.world.tick
+        book = self.commands.faults
+        for name, (target, end, by) in list(book.ends.items()) if book is not None else ():
+            if tick >= end:   # a live fault given `for`: its repair, recorded as any other
+                del book.ends[name]
+                self.commands.inject(Command("repair", target, {"name": name}, by))
         for n, end in list(self.ends.items()):
             if end is not None and tick >= end:
                 del self.ends[n]
@@ -363,6 +428,22 @@ class FaultSchedule:
             self.pending.remove(n)
             self.ends[n] = tick + spec.duration if spec.duration is not None else spec.end
             self.commands.inject(Command("fault", spec.target, spec.message(), "scenario"))
+
+
+class Board:
+    """The instructor's board of a run (hub/view/broadcast.py sends it): its `version` changes
+    whenever a fault begins, ends or comes due, `board()` is the message."""
+
+    def __init__(self, book: FaultBook, schedule: FaultSchedule | None):
+        self.book = book
+        self.schedule = schedule
+
+    @property
+    def version(self) -> tuple[int, int]:
+        return self.book.version, len(self.schedule.pending) if self.schedule is not None else 0
+
+    def board(self) -> dict:
+        return self.book.board(self.schedule)
 
 
 class FaultsState:

@@ -130,6 +130,10 @@ class FaultSpec:
         """What, where and when, in a line (`planthub validate`)."""
         text = ", ".join(f"{k} {v!r}" for k, v in self.parameters.items())
         what = f"{self.kind} at {self.target}" + (f" ({text})" if text else "")
+        return f"{self.name}: {what}, {self.when(rate)}"
+
+    def when(self, rate: int) -> str:
+        """When it starts and ends, in words (`from 2 s for 1 s`)."""
         if self.event is not None:
             start = f"from the {self.count}{_th(self.count)} {self.event}"
         else:
@@ -137,7 +141,7 @@ class FaultSpec:
             start = f"from {self.start / rate:g} s{drawn}"
         end = f" for {self.duration / rate:g} s" if self.duration is not None else \
             f" to {self.end / rate:g} s" if self.end is not None else " to the end"
-        return f"{self.name}: {what}, {start}{end}"
+        return f"{start}{end}"
 
 
 def _th(n: int) -> str:

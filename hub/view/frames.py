@@ -6,9 +6,12 @@ and the `reason` when it is false; `mode: "playback"` and the recording's span f
 `scene` (the scene document, schemas/scene.schema.json), `state`, `figures`, `events` (`rows`),
 `result` (a command's answer, with the `op`, `slot` and `ref` it was sent with), `slots` (live
 values of the belts' velocities), `hub` (`alive`), `error`, and for playback `playback` and
-`recording`. Binary frames: the bodies message exactly as it came from the bus
+`recording`; to an instructor's page only, `faults` (the board, schemas/scene.schema.json
+`faults_message`) — hello's `role` says which page it is (`instructor`, `trainee`, with the
+`role_reason` a trainee's is one). Binary frames: the bodies message exactly as it came from the bus
 (schemas/scene.schema.json `bodies_message`). browser → view: `{"type": "command", "op", "slot",
-"value", "ref"}`, `{"type": "rate", "period"}`, and for playback `{"type": "playback", "op":
+"value", "ref"}` (`fault`: slot `object.component`, value a map with the fault's `name`, `kind`, its
+parameters and an optional `for` in s; `repair`: value `{"name"}`), `{"type": "rate", "period"}`, and for playback `{"type": "playback", "op":
 play|pause|speed|seek, "value"}`.
 
 A browser's frame that is not one of these gets an error frame back naming what is wrong; the
@@ -28,7 +31,8 @@ from hub.core.errors import PlanthubError
 from hub.core.numbers import is_number
 
 #: the operator commands a browser may send; those that name a slot, and those that carry a value
-OPS = ("set", "force", "release", "stop", "pause", "resume", "step", "pace")
+OPS = ("set", "force", "release", "stop", "pause", "resume", "step", "pace", "fault", "repair")
+FAULT_OPS = ("fault", "repair")   # an instructor's only (hub/view/server.py refuses them from a trainee's page)
 SLOT_OPS = ("set", "force", "release")
 #: the largest text frame a browser may send, bytes (a command is under 200)
 MAX_FRAME = 64 * 1024
@@ -94,6 +98,14 @@ def _command(message: dict) -> CommandRequest:
         raise FrameError(f"ref must be a string of at most {MAX_REF} characters, got {_shown(ref)}")
     slot = message.get("slot", "")
     value = message.get("value")
+    if op in FAULT_OPS:
+        parts = slot.split(".") if isinstance(slot, str) else []
+        if (op == "fault" or slot) and (len(parts) != 2 or not all(parts) or len(slot) > MAX_NAME):
+            raise FrameError(f"{op} needs the part it acts on, object.component (at most {MAX_NAME} characters), "
+                             f"got {_shown(slot)}")
+        if not isinstance(value, dict) or not isinstance(value.get("name"), str) or not value["name"]:
+            raise FrameError(f"{op} takes a map with the fault's name, got {_shown(value)}")
+        return CommandRequest(op, slot or "", value, ref)
     if op in SLOT_OPS:
         parts = slot.split(".") if isinstance(slot, str) else []
         if len(parts) != 3 or not all(parts) or len(slot) > MAX_NAME:

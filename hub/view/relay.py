@@ -1,7 +1,9 @@
 """The view's side of the bus: a live participant of one run that hands what the hub sends to the view's loop and puts what the browsers ask for.
 
 It joins as any viewer does (schemas/wire.md, "Live participants"): subscribers first, then its
-liveliness token `plant/<run>/@cosim/viewer/<name>`, which holds its rate requests. Every callback
+liveliness token `plant/<run>/@cosim/viewer/<name>`, which holds its rate requests. An instructor's
+view also subscribes to the instructor's key (`instruct`: the board of faults, their event rows,
+the answers to its commands) and puts its commands there; a trainee's never touches it. Every callback
 only hands the raw payload to a `Bridge` (hub/view/bridge.py); decoding happens on the loop.
 """
 from __future__ import annotations
@@ -39,6 +41,8 @@ class Relay:
         # The name access control knows this view by: its certificate's common name (None: none shown).
         self.common_name = common_name(tls.certificate) if tls is not None and tls.certificate else None
         self.speeds = f"plant/{self.run}/{SPEEDS}"
+        self.instructing = False   # subscribed to the instructor's key (`instruct`)
+        self._bridge = None
 
     @property
     def where(self) -> str:
@@ -47,6 +51,7 @@ class Relay:
     def join(self, bridge) -> None:
         """Subscribe to what the view relays, then declare the viewer token."""
         key, bus = self._key, self.bus
+        self._bridge = bridge
         try:
             bus.subscribe_payloads(key("bodies"), lambda p: bridge.latest("bodies", p))
             bus.subscribe_payloads(key("figures"), lambda p: bridge.latest("figures", p))
@@ -60,14 +65,27 @@ class Relay:
             self.close()
             raise
 
+    def instruct(self) -> None:
+        """Subscribe to the instructor's key (once joined): the faults' board, their event rows, the
+        answers to this view's commands (which `command(…, instructor=True)` puts there)."""
+        if self.instructing:
+            return
+        self.instructing = True
+        key, bus, bridge = lambda *p: wire.instructor_key(self.run, *p), self.bus, self._bridge
+        bus.subscribe_payloads(key("faults"), lambda p: bridge.latest("faults", p))
+        bus.subscribe_payloads(key("events"), lambda p: bridge.put("fault_events", p))
+        bus.subscribe_payloads(key("command", "result"), lambda p: bridge.put("result", p))
+
     def ask_scene(self, timeout: float) -> dict | None:
         """The scene document, or None when the hub did not answer within `timeout` s (blocks)."""
         message = self.bus.ask(self._key("scene"), timeout)
         return None if message is None else self._scene(message.payload)
 
-    def command(self, op: str, slot: str, value, ident: str) -> None:
-        """An operator command, sent by this view (blocks while Zenoh is congested: call it off the loop)."""
-        self.bus.put(self._key("command"), command_message(op, slot, value, self.name, ident), wire.MSGPACK)
+    def command(self, op: str, slot: str, value, ident: str, instructor: bool = False) -> None:
+        """An operator command, sent by this view (blocks while Zenoh is congested: call it off the loop);
+        `instructor`: on the instructor's key, where faults must come from and any command may."""
+        key = wire.instructor_key(self.run, "command") if instructor else self._key("command")
+        self.bus.put(key, command_message(op, slot, value, self.name, ident), wire.MSGPACK)
 
     def rate(self, key: str, period: float | None) -> None:
         """A rate request for the slots (or the bodies message) under `key`; None forgets it."""

@@ -41,26 +41,41 @@ def access(settings) -> dict | None:
     if settings is None or settings.control is None:
         return None
     control = list(dict.fromkeys(settings.control))
-    if settings.tls is not None and settings.tls.certificate:
-        own = common_name(settings.tls.certificate)
-        if own:
-            control = list(dict.fromkeys([*control, own]))   # the hub's own, as the bus's rules add it
-    return {"control": control, "watch": list(dict.fromkeys(settings.watch))}
+    own = common_name(settings.tls.certificate) if settings.tls is not None and settings.tls.certificate else None
+    if own:   # the hub's own, as the bus's rules add it
+        control = list(dict.fromkeys([*control, own]))
+    instructor = list(dict.fromkeys([*settings.instructor, *([own] if own else [])]))
+    return {"control": control, "watch": list(dict.fromkeys(settings.watch)), "instructor": instructor}
 
 
 def refusal(scene: dict, name: str | None) -> str | None:
-    """Why a view whose certificate names `name` may not command this run (None: it may)."""
+    """Why a view whose certificate names `name` may not command this run (None: it may). An
+    instructor may: its commands go on the instructor's key (hub/bus/commands.py)."""
     rules = scene.get("access")
     if not rules:
         return None
     if name is None:
         return ("the run's bus is under access control (run.bus.access) and this view shows no "
                 "certificate: it may watch at most")
-    if name in rules.get("control", []):
+    if name in rules.get("control", []) or name in rules.get("instructor", []):
         return None
     allowed = ", ".join(rules.get("control", [])) or "nobody"
     return (f"this view's certificate names {name!r}, which may only watch this run "
             f"(run.bus.access.control: {allowed})")
+
+
+def not_instructor(scene: dict, name: str | None) -> str | None:
+    """Why a view whose certificate names `name` is not an instructor's of this run (None: it is —
+    without access control, any view is, as any may command)."""
+    rules = scene.get("access")
+    if not rules:
+        return None
+    if name is None:
+        return "the run's bus is under access control (run.bus.access) and this view shows no certificate"
+    if name in rules.get("instructor", []):
+        return None
+    allowed = ", ".join(rules.get("instructor", [])) or "nobody"
+    return f"this view's certificate names {name!r}, not an instructor (run.bus.access.instructor: {allowed})"
 
 
 def scene_bytes(plant, run: str) -> bytes:

@@ -2,6 +2,13 @@
 
     hub ── scene (query), bodies, events, figures, state, results, belt speeds ──► relay ─► View ─► browsers
     hub ◄── command, rate requests ──────────────────────────────────────────────── relay ◄─ View ◄─ browsers
+    hub ── @instructor: faults board, fault events, results ──► relay ─► View ─► an instructor's browsers
+    hub ◄── @instructor/command (fault, repair, any other) ──── relay ◄─ View ◄─ an instructor's browsers
+
+Its role is the view's, not the browser's: an instructor's view (a certificate named in
+run.bus.access.instructor, or any view of a run without access control, unless started with
+`--role trainee`) shows and injects faults; a trainee's subscribes to none of it, and refuses a
+fault command from its page, named, before anything goes on the bus.
 
 The master never waits for the view: the hub sends with congestion control drop, the relay's
 callbacks only hand payloads to the loop (hub/view/bridge.py), and each browser has its own
@@ -21,8 +28,12 @@ from hub.core.errors import PlanthubError
 from hub.view import frames
 from hub.view.bridge import Bridge
 from hub.view.browser import close_browsers
+from hub.view.frames import FAULT_OPS
 from hub.view.relay import SPEEDS_PERIOD, Relay, ViewError, slot_sample
-from hub.view.scene import refusal
+from hub.view.scene import not_instructor, refusal
+
+FAULT_SLOT = "@fault"   # the event rows of faults: an instructor's (hub/view/broadcast.py)
+INSTRUCTOR, TRAINEE = "instructor", "trainee"
 
 _log = logging.getLogger("planthub.view")
 
@@ -38,15 +49,18 @@ SLOTS_FLUSH = 0.05       # s the belt speeds of one point are gathered before th
 class View:
     """What every browser is told and what they ask for, between one Relay and the browsers' sockets."""
 
-    def __init__(self, relay: Relay, *, control: bool = True, reason: str = ""):
+    def __init__(self, relay: Relay, *, control: bool = True, reason: str = "", role: str = INSTRUCTOR,
+                 role_reason: str = ""):
         self.relay = relay
         self.run = relay.run
         self.loop = asyncio.get_running_loop()
         self.browsers: set = set()
-        self.hello = frames.frame("hello", run=self.run, control=control, reason="" if control else reason,
-                                  viewer=relay.name)
         self.control = control
         self.why_not = "" if control else reason   # why the panel is off (a command is refused with it)
+        self.role = role
+        self.role_reason = "" if role == INSTRUCTOR else role_reason   # why this is a trainee's view
+        self.faults = None   # the last faults frame (an instructor's view)
+        self._hello()
         self.scene: str | None = None          # the scene frame, once the hub answered
         self.state = self.figures = None      # the last frames of each, for a browser that comes late
         self.stopped: str | None = None       # why the run stopped, once its state said so
@@ -81,18 +95,37 @@ class View:
         for browser in self.browsers:
             browser.send_bodies(payload)
 
+    def _hello(self) -> None:
+        self.hello = frames.frame("hello", run=self.run, control=self.control, reason=self.why_not,
+                                  viewer=self.relay.name, role=self.role, role_reason=self.role_reason)
+
     def _on_figures(self, payload: bytes) -> None:
-        self.figures = self._broadcast("figures", self._map(payload, "figures"))
+        figures = self._map(payload, "figures")
+        if self.role != INSTRUCTOR and isinstance(figures.get("sections"), dict):
+            figures["sections"].pop("faults", None)   # the hub leaves it out; a trainee's page never has it
+        self.figures = self._broadcast("figures", figures)
+
+    def _on_faults(self, payload: bytes) -> None:
+        if self.role == INSTRUCTOR:
+            self.faults = self._broadcast("faults", self._map(payload, "faults"))
+
+    def _on_fault_events(self, payload: bytes) -> None:
+        if self.role == INSTRUCTOR:
+            self._on_events(payload, faults=True)
 
     def _on_state(self, payload: bytes) -> None:
         state = self._map(payload, "state")
         self.stopped = state.get("reason", "") if state.get("state") == "stopped" else None
         self.state = self._broadcast("state", state)
 
-    def _on_events(self, payload: bytes) -> None:
+    def _on_events(self, payload: bytes, faults: bool = False) -> None:
         rows = wire.unpack(payload)
         if not isinstance(rows, list):
             raise wire.WireError(f"events: expected an array of rows, got {type(rows).__name__}")
+        if not faults:   # the public rows hold none (hub/view/broadcast.py); an older hub's are dropped here
+            rows = [r for r in rows if not (isinstance(r, list) and len(r) > 1 and r[1] == FAULT_SLOT)]
+            if not rows:
+                return
         self.events.extend(rows)
         self._broadcast("events", {"rows": rows})
 
@@ -154,7 +187,14 @@ class View:
         why = refusal(scene, self.relay.common_name)
         if why and self.control:
             self.control, self.why_not = False, why
-            self.hello = frames.frame("hello", run=self.run, control=False, reason=why, viewer=self.relay.name)
+        if self.role == INSTRUCTOR:
+            not_one = not_instructor(scene, self.relay.common_name)
+            if not_one:
+                self.role, self.role_reason = TRAINEE, not_one
+                _log.warning("planthub view: a trainee's view: %s", not_one)
+            else:
+                self.relay.instruct()
+        self._hello()
         if broadcast:
             self.scene = self._broadcast("scene", {"scene": scene})
         else:
@@ -167,7 +207,7 @@ class View:
         if self.scene is not None:
             browser.send(self.scene)
         browser.send(frames.frame("hub", alive=self.hub_alive))
-        for text in (self.state, self.figures):
+        for text in (self.state, self.figures, self.faults if self.role == INSTRUCTOR else None):
             if text is not None:
                 browser.send(text)
         if self.events:
@@ -200,6 +240,9 @@ class View:
         def refuse(why: str) -> None:
             browser.send(frames.frame("error", error=why, op=request.op, slot=request.slot, ref=request.ref))
 
+        if request.op in FAULT_OPS and self.role != INSTRUCTOR:
+            return refuse(f"{request.op}: this is a trainee's view ({self.role_reason}): faults are an instructor's; "
+                          "the command was not sent")
         if not self.control:
             return refuse(f"this view only watches ({self.why_not}): the command was not sent")
         if not self.hub_alive:
@@ -211,7 +254,7 @@ class View:
         self._pending[ident] = (browser, request.op, request.slot, request.ref)
         while len(self._pending) > MAX_PENDING:
             self._pending.popitem(last=False)
-        self._put(self.relay.command, request.op, request.slot, request.value, ident,
+        self._put(self.relay.command, request.op, request.slot, request.value, ident, self.role == INSTRUCTOR,
                   failed=lambda exc: refuse(f"the command could not be sent: {exc}"))
         self.loop.call_later(ANSWER_TIMEOUT, self._unanswered, ident)
 
@@ -290,7 +333,8 @@ async def fetch_scene(relay: Relay, timeout: float, hub_seen=lambda: False) -> d
 
 
 async def serve(relay: Relay, *, host: str, port: int, bundle, control: bool = True, reason: str = "",
-                timeout: float = 30.0, announce=print, opened=None) -> int:
+                timeout: float = 30.0, announce=print, opened=None, role: str = INSTRUCTOR,
+                role_reason: str = "") -> int:
     """Join the run, serve the browsers until SIGINT or SIGTERM; the exit status (130, 143).
     `announce(url)` tells where to open the page once it is served, `opened(url)` may open it."""
     from hub.view.http import serve_page, signal_stop
@@ -299,7 +343,7 @@ async def serve(relay: Relay, *, host: str, port: int, bundle, control: bool = T
     with signal_stop(loop) as stop:
         view = None
         try:
-            view = View(relay, control=control, reason=reason)
+            view = View(relay, control=control, reason=reason, role=role, role_reason=role_reason)
             relay.join(Bridge(loop, view.deliver))
             fetching = loop.create_task(fetch_scene(relay, timeout, lambda: view.hub_alive))
             await asyncio.wait({fetching, stop}, return_when=asyncio.FIRST_COMPLETED)
