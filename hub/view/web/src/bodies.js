@@ -18,7 +18,8 @@ export function bottleState(flags) {
 }
 
 const COLOURS = BOTTLE_STATES.map((s) => new THREE.Color(s.colour));
-const HIGHLIGHT = new THREE.Color(0xff3df0);
+export const HIGHLIGHT_COLOUR = 0xff3df0;   // the followed bottle
+const HIGHLIGHT = new THREE.Color(HIGHLIGHT_COLOUR);
 
 export class Bottles {
   /** @param {Array<{row, id, object, radius, height}>} bodies the scene's bodies */

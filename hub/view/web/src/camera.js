@@ -1,12 +1,18 @@
 // The camera: orbit, pan and zoom about a target (OrbitControls, z up as in the plant), framing
 // the plant when a scene comes, and a follow mode that carries camera and target along with one
-// bottle so the user keeps the angle and distance they chose.
+// bottle so the user keeps the angle and distance they chose. When the bottle leaves the plant
+// (delivered, taken out: no longer in the bodies drawn) the camera lets go where it is, after
+// LET_GO s without it — a bottle is missing from a frame or two while samples are sparse — and
+// says so (`onLost`), instead of staying locked on a bottle that will not come back.
 
 import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 
+const LET_GO = 0.5;   // s of wall time the followed bottle may be missing before the camera lets go
+
 export class CameraRig {
-  constructor(canvas) {
+  constructor(canvas, onLost = () => {}) {
+    this.onLost = onLost;          // (id) => void: the followed bottle left, the camera let go
     this.camera = new THREE.PerspectiveCamera(45, 1, 0.01, 500);
     this.camera.up.set(0, 0, 1);
     this.camera.position.set(-3, -4, 3);
@@ -16,6 +22,7 @@ export class CameraRig {
     this.controls.screenSpacePanning = true;
     this.following = null;          // body id, or null
     this._last = null;              // the followed body's position at the last frame
+    this._missing = null;           // wall time (s) the followed body was first missing, or null
   }
 
   resize(width, height) {
@@ -46,12 +53,22 @@ export class CameraRig {
   follow(id) {
     this.following = id || null;
     this._last = null;
+    this._missing = null;
   }
 
-  /** Per frame: `positionOf(id)` the drawn position of the followed body (undefined: not in play). */
-  update(positionOf) {
+  /** Per frame: `positionOf(id)` the drawn position of the followed body (undefined: not in play);
+   * `now` wall time in s; `drawing`: whether any sample is drawn (no let-go before the first). */
+  update(positionOf, now = performance.now() / 1000, drawing = true) {
     if (this.following) {
       const p = positionOf(this.following);
+      if (!p && drawing) {
+        this._missing ??= now;
+        if (now - this._missing >= LET_GO) {
+          const id = this.following;
+          this.follow(null);   // the camera stays where it is, free to orbit again
+          this.onLost(id);
+        }
+      } else if (p) this._missing = null;
       if (p) {
         if (this._last) {
           const delta = p.clone().sub(this._last);

@@ -16,6 +16,10 @@ export function installHooks(bodiesNow) {
     scene: null,        // the scene document drawn
     results: [],        // command results {id, ok, tick, error}, oldest first
     playback: null,     // a recorded run's playback: {time: plant s drawn, playing, speed}; null: a live run
+    faults: null,       // the last faults board (an instructor's page only)
+    exercise: null,     // the exercise as shown: {task, goals, score, …, ended}
+    labels: () => [],   // the name tags shown now: [{object, kind}]
+    lost: [],           // ids of followed bottles the camera let go of when they left
   };
   window.planthub = hooks;
   return hooks;

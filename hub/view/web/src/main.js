@@ -7,7 +7,11 @@ import { decodeBodies } from './bodiesmsg.js';
 import { Playback } from './playback.js';
 import { Stage } from './stage.js';
 import { PlantScene } from './scene.js';
-import { Bottles, BOTTLE_STATES } from './bodies.js';
+import { Bottles, BOTTLE_STATES, HIGHLIGHT_COLOUR } from './bodies.js';
+import { PLANT_LEGEND } from './scene.js';
+import { Labels } from './labels.js';
+import { ExercisePanel } from './exercise.js';
+import { FaultsPanel } from './faults.js';
 import { Arms } from './arm.js';
 import { Panel } from './panel.js';
 import { Figures, formatNumber } from './figures.js';
@@ -32,6 +36,11 @@ class App {
     this.bottles = null;
     this.arms = null;
     this.panel = new Panel(this.$('#panel'), (m) => this.connection.send(m));
+    this.faults = new FaultsPanel(this.$('#faults-box'), (m) => this.connection.send(m));
+    this.exercise = new ExercisePanel(this.$('#exercise-box'));
+    this.labels = new Labels(this.$('#tags'));
+    this.hooks.labels = () => this.labels.shown(this.stage.rig.camera, this.stage.canvas);
+    this.stage.rig.onLost = (id) => this._lost(id);
     this.figures = new Figures(this.$('#figures'));
     this.plots = new Plots(this.$('#plots'));
     this.recorded = new RecordedPlots(this.$('#recorded'));
@@ -70,10 +79,11 @@ class App {
       figures: () => this._figures(m),
       events: () => this._events(m),
       result: () => this._result(m),
+      faults: () => this._faults(m),
       slots: () => this.plots.slots(m),
       playback: () => this._playbackState(m),
       recording: () => this.recorded.set(m),
-      error: () => this.playbar.refused(m),
+      error: () => this._error(m),
     }[m.type];
     if (handler) handler();   // unknown types: a newer server; ignore, as the spec says for keys
   }
@@ -83,6 +93,14 @@ class App {
     this.$('#run-name').textContent = m.run ?? '—';
     document.title = `planthub view — ${m.run ?? ''}`;
     this.panel.setControl(m.control === true, m.reason);
+    // The role is the view server's: a trainee's page is never sent a fault (hub/view/server.py).
+    const role = m.role === 'trainee' ? 'trainee' : m.mode === 'playback' ? 'playback' : 'instructor';
+    document.body.dataset.role = role;
+    this.faults.setRole(role);
+    const badge = this.$('#role');
+    badge.hidden = role === 'playback';
+    badge.textContent = role;
+    badge.title = role === 'trainee' ? `a trainee's view: ${m.role_reason ?? ''}` : 'an instructor\'s view: it sees and injects faults';
     this.mode = m.mode === 'playback' ? 'playback' : 'live';
     if (this.mode === 'playback') {
       this.playbar.show(m);
@@ -117,6 +135,7 @@ class App {
     this.plant.root.add(this.bottles.mesh);
     this.arms = new Arms(this.plant.arms, this.plant.root);
     this.stage.scene.add(this.plant.root);
+    this.labels.setPlant(this.plant);
     const box = this.plant.bounds();
     this.stage.floor(box);
     if (first) this.stage.rig.fit(box);
@@ -134,6 +153,7 @@ class App {
     this.stage.scene.remove(this.plant.root);
     this.bottles.dispose();
     this.plant.dispose();
+    this.labels.clear();
     this.plant = this.bottles = this.arms = null;
   }
 
@@ -149,7 +169,12 @@ class App {
   _figures(m) {
     const { type, ...figures } = m;
     this.hooks.figures = figures;
-    this.figures.update(figures);
+    const { exercise, ...others } = figures.sections ?? {};
+    this.figures.update({ ...figures, sections: others });
+    if (exercise) {
+      this.exercise.update(exercise, figures.ended || figures.final || this.hooks.state?.state === 'stopped');
+      this.hooks.exercise = this.exercise.last;
+    }
     this.$('#figures-final').hidden = !figures.final;
     if (!figures.final) this.plots.figures(figures);
   }
@@ -157,7 +182,35 @@ class App {
   _result(m) {
     const { type, ...result } = m;
     this.hooks.results.push(result);
-    this.panel.result(result);
+    if (result.op === 'fault' || result.op === 'repair') this.faults.result(result);
+    else this.panel.result(result);
+  }
+
+  /** The view's refusal of a command (or of a playback request): said where it was asked. */
+  _error(m) {
+    if (m.op === 'fault' || m.op === 'repair') {
+      this.hooks.results.push({ ...m, ok: false });
+      this.faults.result({ ...m, ok: false });
+    } else this.playbar.refused(m);
+  }
+
+  _faults(m) {
+    const { type, ...board } = m;
+    this.hooks.faults = board;
+    this.faults.update(board);
+  }
+
+  /** The followed bottle left the plant: the camera let go of it (camera.js). */
+  _lost(id) {
+    this._highlight(null);
+    this._refreshFollowList();
+    this.$('#follow').value = '';
+    const note = this.$('#camera-note');
+    note.textContent = `${id} left the plant: the camera let go`;
+    note.hidden = false;
+    clearTimeout(this._noteTimer);
+    this._noteTimer = setTimeout(() => { note.hidden = true; }, 4000);
+    this.hooks.lost.push(id);
   }
 
   _bodies(data) {
@@ -200,8 +253,9 @@ class App {
       this.recorded.mark(t);
       this.hooks.playback.time = t;
     }
-    this.stage.rig.update((id) => this.bottles?.find(id)?.position);
+    this.stage.rig.update((id) => this.bottles?.find(id)?.position, now / 1000, t !== null && !!this.bottles);
     this.picker.update();
+    this.labels.update(this.stage.rig.camera, this.stage.canvas.clientWidth, this.stage.canvas.clientHeight);
     if (this.stage.render()) this.hooks.frames++;
   }
 
@@ -220,20 +274,27 @@ class App {
 
   // ---- page furniture -------------------------------------------------------------------
 
+  /** Every kind of thing drawn: the bottles by state, the followed one, and the plant's parts. */
   _legend() {
     const box = this.$('#legend');
-    box.replaceChildren(...BOTTLE_STATES.map((s) => {
+    const entry = (colour, label, data) => {
       const item = document.createElement('span');
-      item.dataset.state = s.key;
+      Object.assign(item.dataset, data);
       const swatch = document.createElement('i');
-      swatch.style.background = `#${s.colour.toString(16).padStart(6, '0')}`;
-      item.append(swatch, s.label);
+      swatch.style.background = `#${colour.toString(16).padStart(6, '0')}`;
+      item.append(swatch, label);
       return item;
-    }));
+    };
+    box.replaceChildren(
+      ...BOTTLE_STATES.map((s) => entry(s.colour, s.label, { state: s.key })),
+      entry(HIGHLIGHT_COLOUR, 'followed bottle', { state: 'followed' }),
+      ...PLANT_LEGEND.map((p) => entry(p.colour, p.label, { kind: p.key })),
+    );
   }
 
   _cameraBar() {
     this.$('#follow').addEventListener('change', (e) => this._follow(e.target.value));
+    this.$('#labels').addEventListener('change', (e) => this.labels.show(e.target.checked));
     this.$('#fit').addEventListener('click', () => {
       this._follow('');
       if (this.plant) this.stage.rig.fit(this.plant.bounds());

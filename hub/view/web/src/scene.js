@@ -15,7 +15,21 @@ const COLOURS = {
   moving: 0x4f79b8,
   trigger: 0xf2d24b,
   triggerOn: 0xff4538,
+  belt: 0x3a4048,
+  arm: 0x888888,
 };
+
+/** The legend of what the plant is drawn with: every kind of scene item (and a sensor's two looks). */
+export const PLANT_LEGEND = [
+  { key: 'belt', label: 'belt', colour: COLOURS.belt },
+  { key: 'support', label: 'support', colour: COLOURS.support },
+  { key: 'box', label: 'frame or rail', colour: COLOURS.box },
+  { key: 'part', label: 'switch blade or gate', colour: COLOURS.part },
+  { key: 'moving', label: 'moving part', colour: COLOURS.moving },
+  { key: 'trigger', label: 'sensor', colour: COLOURS.trigger },
+  { key: 'triggerOn', label: 'sensor sees a bottle', colour: COLOURS.triggerOn },
+  { key: 'arm', label: 'robot arm', colour: COLOURS.arm },
+];
 
 /** Stripes across the belt, made once; each belt gets a clone to scroll at its own speed. */
 function stripeTexture() {
