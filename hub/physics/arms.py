@@ -15,12 +15,10 @@ class Arms:
     #: hub/core/state.py: what each arm does and grips (save_state names arms by their place).
     STATE = ("arms", "held")
 
-    def __init__(self, engine, bodies, bottles, rest, sleep, triggers):
+    def __init__(self, engine, bodies, bottles, triggers):
         self._engine = engine
         self.bodies = bodies
         self.bottles = bottles
-        self.rest = rest
-        self.sleep = sleep
         self.triggers = triggers
         self.arms: list[KinematicArm] = []
         self.held: dict[KinematicArm, int] = {}   # arm → the body it grips (never rests)
@@ -37,12 +35,10 @@ class Arms:
         self.triggers.move(trigger, arm.tool_position + offset)
 
     def grip(self, arm: KinematicArm, body: int) -> None:
-        """The body leaves the dynamics and follows the tool."""
+        """The body leaves the dynamics and follows the tool (the world announced it first:
+        changes.Gripped, which takes it out of free transport and rest)."""
         if body in self.bottles.base_bodies:
             raise NotImplementedError("gripping a bottle with a second base body")
-        if self.rest.resting[body]:
-            self.sleep.wake(np.array([body]))
-        self.rest.forget(body)
         self.held[arm] = body
         arm.hold(self.bodies.ids[body], self.bodies.positions[body], self.bodies.orientations[body].tolist())
 

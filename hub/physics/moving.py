@@ -34,6 +34,7 @@ import numpy as np
 
 from hub.core import state
 from hub.physics._quiet import quiet_stderr
+from hub.physics.changes import PartsMoving
 from hub.physics.rest import BREAKING, SHAPE_MARGIN
 
 with quiet_stderr():
@@ -167,10 +168,10 @@ class MovingParts:
 
     STATE = ("parts",)
 
-    def __init__(self, engine, rate: int, sleep):
+    def __init__(self, engine, rate: int, changes):
         self.engine = engine
         self.rate = rate
-        self.sleep = sleep
+        self.changes = changes           # where the parts under way are announced (changes.py)
         self.parts: list[MovingPart] = []
 
     @property
@@ -187,9 +188,10 @@ class MovingParts:
         boxes = [part.box() for part in self.parts if part.travel is not None]
         return np.array([c for c, _ in boxes]), np.array([e for _, e in boxes])
 
-    def wake_near(self) -> None:
-        """Before a tick: wake the resting bodies a moving part comes near."""
-        self.sleep.wake_in(*self.boxes())
+    def sweep(self) -> None:
+        """Before a tick: announce the boxes the parts under way sweep (changes.PartsMoving): what
+        rests in them wakes."""
+        self.changes.announce(PartsMoving(*self.boxes()))
 
     def update(self, tick: int) -> None:
         for part in self.parts:

@@ -3,10 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hub.physics._quiet import quiet_stderr
-
-with quiet_stderr():
-    pass
+from hub.physics.changes import PartTurned
 
 
 class SwitchableParts:
@@ -14,9 +11,9 @@ class SwitchableParts:
 
     STATE = ("solid",)   # hub/core/state.py; the engine keeps each body's filter (Engine.filters)
 
-    def __init__(self, engine, sleep):
+    def __init__(self, engine, changes):
         self.engine = engine
-        self.sleep = sleep
+        self.changes = changes           # where a part's turn is announced (changes.py)
         self._bodies: list[int] = []
         self._boxes: list[tuple] = []   # each part's bounding box (lo, hi), for waking what rests in it
         self._thinnest: list[tuple] = []   # each part's thinnest box: (its centre, half its thickness), m
@@ -60,10 +57,10 @@ class SwitchableParts:
         """Collision on or off through the body's filter group and mask: one call whatever the
         number of bottles (setCollisionFilterPair needs one per bottle), 0.8 µs, in effect from
         the next tick in both directions (measured). On: pybullet's own values for a fixed body.
-        A fixed body wakes no sleeping one: bodies resting in its box are woken here."""
-        if self.sleep.rest.resting.any():
-            lo, hi = (np.asarray(v, float) for v in self._boxes[part])
-            self.sleep.wake_in([(lo + hi) / 2.0], [(hi - lo) / 2.0])
+        A fixed body wakes no sleeping one: the turn is announced (changes.PartTurned), and what
+        rests in its box wakes then."""
+        lo, hi = (np.asarray(v, float) for v in self._boxes[part])
+        self.changes.announce(PartTurned(part, solid, (lo + hi) / 2.0, (hi - lo) / 2.0))
         self.solid[part] = solid
         group, mask = (2, -3) if solid else (0, 0)
         self.engine.set_filter(self._bodies[part], -1, group, mask)

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from hub.physics._quiet import quiet_stderr
+from hub.physics.changes import Gripped, Parked, Placed, Tipped, reached
 from hub.physics.rest import overlapping
 
 with quiet_stderr():
@@ -50,17 +51,22 @@ class Sleep:
             b.angular_velocities[candidates] = 0.0
             b.stale = True
 
+    def hear(self, change) -> None:
+        """A change a part made (changes.py): a body the plant takes in hand (gripped, parked,
+        put down, tipped) leaves the resting set, one gripped at rest wakes first; the resting
+        bodies the change reaches wake (those free transport took off free from rest excepted)."""
+        rest = self.rest
+        if isinstance(change, (Gripped, Parked, Placed, Tipped)):
+            if isinstance(change, Gripped) and rest.resting[change.body]:
+                self.wake(np.array([change.body]))
+            rest.forget(change.body)
+        self.wake(reached(change, rest, self.bodies.positions))
+
     def wake_near(self) -> None:
         """Before a tick: wake the resting bodies an awake body has come near (the island Bullet wakes)."""
         b = self.bodies
         self.wake(self.rest.woken_by(b.awake_rows(), b.positions, b.orientations, b.velocities,
                                      b.angular_velocities))
-
-    def wake_in(self, centres, extents) -> None:
-        """Wake the resting bodies (and their groups) whose boxes overlap any of the boxes (centres,
-        extents): what a part that the engine does not count as awake touches or will touch."""
-        if self.rest.resting.any():
-            self.wake(self.rest.joining(centres, extents, self.bodies.positions))
 
     def wake_all(self) -> None:
         """Wake every resting body (they rest again once still for sleep_after)."""

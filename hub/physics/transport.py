@@ -64,6 +64,7 @@ import numpy as np
 from numba import njit
 
 from hub.physics._quiet import quiet_stderr
+from hub.physics.changes import BeltSpeed, Gripped, LetGo, Parked, Tipped, reached
 from hub.physics.fields import ARC, field_at, law_at
 from hub.physics.rest import SHAPE_MARGIN, bound, boxes, extent, turning
 
@@ -247,6 +248,28 @@ class FreeTransport:
             self._settle(look[settle], now[settle])
         if back.any():
             self.release(rows[back])
+
+    # --- what the plant changes (changes.py) -------------------------------------------------
+    def hear(self, change) -> None:
+        """A change a part made: a belt's new speed has every free bottle looked at whole before
+        the next tick, and the resting bodies on it that may ride free ride off (`from_rest`,
+        the others left for sleep to wake); a body an arm grips or a fault tips comes back into the
+        engine, a parked one is forgotten, and one let go of has every free bottle looked at whole.
+        A gate or blade turning changes nothing here (a free bottle keeps clear of every part's
+        boxes, solid or not), nor does a moving part under way (looked at, at every look, as it
+        moves), nor a body put down (looked at whole: `placed`)."""
+        if isinstance(change, BeltSpeed):
+            self.look_whole()
+            if self.enabled:
+                rows = reached(change, self.rest, self.bodies.positions)
+                if len(rows):
+                    change.woken = self.from_rest(rows)
+        elif isinstance(change, (Gripped, Tipped)):
+            self.release([change.body])
+        elif isinstance(change, Parked):
+            self.forget(change.body)
+        elif isinstance(change, LetGo):
+            self.look_whole()
 
     def release(self, rows) -> None:
         """Put free bottles back into the engine with their pose and velocity (spin zero)."""

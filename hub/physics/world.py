@@ -11,6 +11,7 @@ from hub.physics._quiet import quiet_stderr
 from hub.physics.arms import Arms
 from hub.physics.bodies import Bodies
 from hub.physics.bottles import Bottles
+from hub.physics.changes import BeltSpeed, Change, Changes, Gripped, LetGo, Parked, Tipped
 from hub.physics.engine import Engine
 from hub.physics.fields import ForceFields
 from hub.physics.frames import Arc, Pose, Straight
@@ -52,6 +53,7 @@ class PhysicsWorld:
     | `transport` | transport.py | bottles in free transport, moved by their belt's law outside the engine |
     | `watch` | watch.py, placement.py | a run gone wrong: bodies too fast, non-finite or out of the box; overlaps at load |
     | `scene` | scene.py | what was built and by which object, and the moving state, for a view |
+    | `changes` | changes.py | what a part changes (a belt's speed, a gate, an arm's grip…), announced once (`announce`) |
 
     Each tick reads the state of every body in play once, except those at rest (asleep in the
     engine, their state stands) and those in free transport (the hub moves them); force fields,
@@ -115,10 +117,15 @@ class PhysicsWorld:
         self.transport = FreeTransport(self.engine, self.bodies, self.fields, self.rest, self.dt)
         self.bottles = Bottles(self.engine, self.bodies, self.rest, self.transport)
         self.sleep = Sleep(self.engine, self.bodies, self.rest)
-        self.parts = SwitchableParts(self.engine, self.sleep)
-        self.moving = MovingParts(self.engine, rate, self.sleep)
-        self.parking = Parking(self.engine, self.bodies, self.bottles, self.rest, self.sleep)
-        self.robots = Arms(self.engine, self.bodies, self.bottles, self.rest, self.sleep, self.triggers)
+        # The levels of detail hear every change a part makes (changes.py), free transport first:
+        # it may take resting bodies a belt's start reaches off free before sleep wakes them.
+        self.changes = Changes()
+        self.changes.listen(self.transport)
+        self.changes.listen(self.sleep)
+        self.parts = SwitchableParts(self.engine, self.changes)
+        self.moving = MovingParts(self.engine, rate, self.changes)
+        self.parking = Parking(self.engine, self.bodies, self.bottles)
+        self.robots = Arms(self.engine, self.bodies, self.bottles, self.triggers)
         self.watch = Watch(self.gravity)        # off until configured; hub/run/plant.py does, from run.watch
         self.warnings: list[str] = []           # what the checks at the start found doubtful (logged too)
         self.scene = SceneLog()                 # what was built, by whom, as a view draws it (scene.py)
@@ -206,22 +213,23 @@ class PhysicsWorld:
         self.scene.belt(field, line, half_width, line.start.z)
         return field
 
+    def announce(self, change: Change) -> Change:
+        """Tell every level of detail (free transport, rest and sleep, …) of a change a part made
+        to the world (changes.py): the one call through which the world's parts and the modules
+        report what they change."""
+        return self.changes.announce(change)
+
     def set_field_speed(self, field: int, speed: float) -> None:
-        """A belt's speed; bodies resting on it wake when it changes — those that may ride free
-        and nothing can touch ride off free instead (transport.py). The same speed again changes
-        nothing and costs nothing (a belt sets its field's speed only when it changes, but any
-        caller may): the watch's bound follows the speeds a belt changes to (it starts from those
-        at load)."""
+        """A belt's speed (announced: `BeltSpeed`); bodies resting on it wake when it changes — those
+        that may ride free and nothing can touch ride off free instead (transport.py). The same
+        speed again changes nothing and costs nothing (a belt sets its field's speed only when it
+        changes, but any caller may): the watch's bound follows the speeds a belt changes to (it
+        starts from those at load)."""
         if speed == self.fields.speeds[field]:
             return
         self.watch.belt_speed(speed)
         self.fields.set_speed(field, speed)
-        self.transport.look_whole()
-        if self.rest.resting.any():
-            rows = self.rest.on_field(field, self.bodies.positions)
-            if self.transport.enabled and len(rows):
-                rows = self.transport.from_rest(rows)
-            self.sleep.wake(rows)
+        self.announce(BeltSpeed(field, speed))
 
     def add_cylinder(self, base, radius: float, height: float, mass: float, label: str) -> int:
         row = self.bottles.add_cylinder(base, radius, height, mass, label)
@@ -264,18 +272,19 @@ class PhysicsWorld:
         return part
 
     def park(self, body: int) -> None:
-        self.transport.forget(body)
+        self.announce(Parked(body))
         self.parking.park(body)
 
     def unpark(self, body: int, base) -> None:
-        self.parking.unpark(body, base)
+        self.announce(self.parking.unpark(body, base))
 
     def is_parked(self, body: int) -> bool:
         return body in self.bodies.parked
 
     def tip(self, body: int, heading: float) -> None:
         """Lay a bottle in play on its side where it stands, its axis along `heading` (rad): a fault."""
-        self.transport.release([body])
+        centre, _, extents = self.parking.lying(body, heading)
+        self.announce(Tipped(body, centre, extents))
         self.parking.lay(body, heading)
 
     def add_arm(self, base, yaw: float, tool_length: float) -> KinematicArm:
@@ -287,12 +296,15 @@ class PhysicsWorld:
         self.robots.follow(trigger, arm, offset)
 
     def grip(self, arm: KinematicArm, body: int) -> None:
-        self.transport.release([body])
+        if body in self.bottles.base_bodies:
+            raise NotImplementedError("gripping a bottle with a second base body")
+        self.announce(Gripped(body))
         self.robots.grip(arm, body)
 
     def release(self, arm: KinematicArm) -> None:
+        body = self.robots.held.get(arm, -1)
         self.robots.release(arm)
-        self.transport.look_whole()   # the bottle let go of collides from the next tick on
+        self.announce(LetGo(body))   # the bottle let go of collides from the next tick on
 
     def belts_under(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Read-only, for statistics beside the loop (modules/plant/jams.py): the bodies in play
@@ -378,8 +390,8 @@ class PhysicsWorld:
                 transport.release_near(self.tick, b.placed, moving.moving, b.awake_rows())
             if rest.resting.any():
                 sleep.wake_near()
-                if moving.moving:
-                    moving.wake_near()
+            if moving.moving:
+                moving.sweep()
             self.bottles.drive(self.fields)
             step(client)
             self.tick += 1

@@ -89,7 +89,7 @@ def test_without_the_wake_the_engine_moves_a_resting_bottle_and_the_check_names_
     """The proof that the wake matters: a resting bottle is out of the collision world, so the
     awake plate would pass through it while the hub still holds it at rest; the check names it."""
     from hub.physics.moving import MovingParts
-    monkeypatch.setattr(MovingParts, "wake_near", lambda self: None)
+    monkeypatch.setattr(MovingParts, "sweep", lambda self: None)   # nothing announced
     with floor_world() as world:
         resting_in_the_way(world)
         with pytest.raises(RuntimeError, match=r"in_the_way rests in planthub but body \d+ touches it: the wake came too late"):
