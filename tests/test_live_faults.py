@@ -36,7 +36,9 @@ def test_an_instructors_fault_is_applied_recorded_ended_after_its_duration_and_r
         assert wait_until(master.commands.pending, 5.0)
         master.run()
         answer = instructor.answer(ident, 5.0)
+        faults = [s for s in master.summary().sections if s.key == "faults"]
     assert answer == {"id": ident, "ok": True, "tick": 33, "error": ""}
+    assert [(f.name, f.target, f.start, f.end) for f in faults[0].started] == [("slow", "belt.drive", 33, 108)]
     commands = [(r["tick"], r["op"], r["slot"], r["value"], r["by"]) for r in rows(live / "commands.csv")]
     assert commands == [
         ("33", "fault", "belt.drive", '{"name": "slow", "kind": "belt_failure", "speed": 0.2, "for": 0.5}',
@@ -54,17 +56,18 @@ def test_an_instructors_fault_is_applied_recorded_ended_after_its_duration_and_r
 
 def test_a_fault_on_the_operators_key_is_refused_and_a_bad_one_is_named(tmp_path):
     with Bus(BusSettings()) as bus, hub(STOP, tmp_path, bus=bus) as master, Viewer(RUN, bus.endpoints) as someone:
-        master.run(until_tick=15)
-        sent = [someone.command("fault", "belt.drive", SLOW, wait=None),
-                someone.command("fault", "belt.drive", {"name": "x", "kind": "sensor_stuck", "value": True},
-                                wait=None, instructor=True),
-                someone.command("fault", "barier.trigger", {"name": "y", "kind": "sensor_stuck", "value": True},
-                                wait=None, instructor=True),
-                someone.command("fault", "barrier.trigger", {"name": "z", "kind": "sensor_stuck", "value": True,
-                                                             "for": -1}, wait=None, instructor=True)]
-        assert wait_until(lambda: master.commands.pending(), 5.0)
-        master.run(until_tick=45)
-        answers = [someone.answer(ident, 5.0) for ident in sent]
+        sent = [("fault", "belt.drive", SLOW, False),
+                ("fault", "belt.drive", {"name": "x", "kind": "sensor_stuck", "value": True}, True),
+                ("fault", "barier.trigger", {"name": "y", "kind": "sensor_stuck", "value": True}, True),
+                ("fault", "barrier.trigger", {"name": "z", "kind": "sensor_stuck", "value": True, "for": -1}, True)]
+        answers, tick = [], 15
+        for op, slot, value, instructor in sent:   # one at a time: each is answered at its own point
+            master.run(until_tick=tick)
+            ident = someone.command(op, slot, value, wait=None, instructor=instructor)
+            assert wait_until(master.commands.pending, 5.0)
+            tick += 15
+            master.run(until_tick=tick)
+            answers.append(someone.answer(ident, 5.0))
     assert [a["ok"] for a in answers] == [False] * 4
     assert answers[0]["error"] == ("fault: faults are an instructor's: put it on plant/<run>/@instructor/command "
                                    "(under run.bus.access, with a certificate named in access.instructor)")

@@ -99,8 +99,12 @@ class Run:
             self.schedule = schedule
             self.contributed = _contributions(scenario, plant)
             from hub.run.exercise import FaultsFigure, Score  # the faults that began, the exercise's score
-            if scenario.faults or live or any(c.op == "fault" for _, c in recorded or ()):
-                self.contributed += [FaultsFigure(self.faults, rate), FaultsState(self.faults, schedule)]
+            faulted = [FaultsFigure(self.faults, rate), FaultsState(self.faults, schedule)]
+            if scenario.faults or any(c.op == "fault" for _, c in recorded or ()):
+                self.contributed += faulted
+            elif live:   # in the summary and a checkpoint from the first live fault on: a run without
+                # one keeps the files, summary and checkpoints of a run that could take none
+                self.faults.on_first = lambda: self.contributed.extend(faulted)
             if scenario.exercise is not None:
                 self.contributed.append(Score(scenario.exercise, self.contributed, self.faults, rate))
             self.bodies = None   # the body recording, for playback (run.record_bodies)

@@ -83,6 +83,7 @@ class FaultBook:
         self.timed = False     # a live run: a fault given `for` gets its repair from the schedule (`ends`)
         self.ends: dict[str, tuple[str, int, str]] = {}   # fault → (target, end tick, by) of timed live faults
         self.version = 0       # changes whenever a fault begins or ends (the instructor's board is sent again)
+        self.on_first = None   # called when the first fault begins (the run assembly adds the faults' figures)
         self._targets = None
         self.active: dict[str, _Effect] = {}
         self._ending: list[_Effect] = []   # ended at this point: their last word at the next SOURCE step
@@ -126,6 +127,9 @@ class FaultBook:
                                          **({} if lasts is None else {"for": float(lasts)})}, by)
 
     def begin(self, tick: int, command: Command) -> None:
+        if self.on_first is not None:
+            self.on_first()
+            self.on_first = None
         name = command.value["name"]
         if name in self.active:
             self._stop(tick, name)
