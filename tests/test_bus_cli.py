@@ -71,3 +71,21 @@ def test_realtime_needs_a_positive_factor():
     proc = planthub("run", "scenarios/stop_at_barrier.yaml", "--realtime", "0")
     assert proc.returncode == 2   # a usage error: argparse's, with the usage
     assert proc.stderr.endswith("planthub run: error: argument --realtime: needs a positive factor, got 0\n")
+
+
+def test_an_instructor_sends_a_fault_and_the_replay_applies_it_again(tmp_path):
+    endpoint = free_loopback_endpoint()
+    with process("-m", "hub", "run", "scenarios/stop_at_barrier.yaml", "--realtime", "1",
+                 "--listen", endpoint, "--out", tmp_path / "live") as run:
+        sent = planthub("send", "stop_at_barrier", "fault", "belt.drive", "{name: slow, kind: belt_failure, speed: 0.5}",
+                        "--connect", endpoint, "--by", "teacher")
+        bad = planthub("send", "stop_at_barrier", "fault", "belt", "{name: x, kind: belt_failure}",
+                       "--connect", endpoint)
+        out, err = run.communicate(timeout=60)
+    assert sent.returncode == 0, sent.stderr
+    assert sent.stdout.startswith("fault belt.drive applied at tick ")
+    assert bad.returncode == 1 and "fault x: name the component: belt.drive" in bad.stderr, bad.stderr
+    assert run.returncode == 0, err
+    replay = planthub("run", "scenarios/stop_at_barrier.yaml", "--replay", tmp_path / "live", "--out", tmp_path / "replay")
+    assert replay.returncode == 0, replay.stderr
+    assert same_files(tmp_path / "live", tmp_path / "replay", ("recording.csv", "events.csv", "commands.csv"))

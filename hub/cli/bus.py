@@ -48,11 +48,13 @@ def add_commands(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str 
                "--by alice\n\n" + epilog)
     send.add_argument("run", help="the run's name (the scenario's name)")
     send.add_argument("op", choices=["set", "force", "release", "stop", "pause", "resume", "step", "pace",
-                                     "checkpoint"],
+                                     "checkpoint", "fault", "repair"],
                       help="set: the slot takes the value at the next point; force: at every point until release; "
                            "stop: the run ends after the next point; pause, resume; step N: N points while "
                            "paused; pace F: F × real time (a --realtime run); checkpoint: the run saved at the "
-                           "next point into its folder's checkpoints/TICK.ckpt")
+                           "next point into its folder's checkpoints/TICK.ckpt; fault PART MAP, repair PART "
+                           "'{name: N}': an instructor's, sent on the instructor's key (schemas/README.md "
+                           "\"Faults and exercises\")")
     send.add_argument("slot", nargs="?", default="",
                       help="object.component.slot (for set, force, release); for step and pace: the number")
     send.add_argument("value", nargs="?", help="the value, read as YAML (0.2, true, [0, 0, 1]); for set and force")
@@ -118,6 +120,10 @@ def _send(parser, args) -> int:
     with Bus(BusSettings(connect=tuple(args.connect), tls=tls), listen=False) as bus:
         bus.watch_tokens(wire.hub_token(args.run), lambda m: inbox.put(("hub", m.alive)))
         bus.subscribe(wire.control_key(args.run, "command", "result"), lambda m: inbox.put(("result", m.payload)))
+        bus.subscribe(wire.instructor_key(args.run, "command", "result"), lambda m: inbox.put(("result", m.payload)))
+        # A fault is an instructor's: on the instructor's key (under access control, a certificate in access.instructor).
+        key = wire.instructor_key(args.run, "command") if args.op in ("fault", "repair") else \
+            wire.control_key(args.run, "command")
         deadline = time.monotonic() + args.timeout
         sent = False
         while time.monotonic() < deadline:
@@ -126,8 +132,7 @@ def _send(parser, args) -> int:
                 break
             kind, payload = item
             if kind == "hub" and payload and not sent:
-                bus.put(wire.control_key(args.run, "command"),
-                        command_message(args.op, args.slot, value, args.by, ident), wire.MSGPACK)
+                bus.put(key, command_message(args.op, args.slot, value, args.by, ident), wire.MSGPACK)
                 sent = True
             elif kind == "result":
                 result = wire.unpack(payload)
