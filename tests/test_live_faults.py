@@ -102,3 +102,25 @@ def test_the_board_of_faults_goes_out_on_the_instructors_key_and_no_fault_row_on
                                "parameters": {"speed": 0.5}, "until": None}]
     assert [r[1] for r in private_rows] == ["@fault"]
     assert public_rows and all(r[1] != "@fault" for r in public_rows)
+
+
+def test_the_public_figures_hold_no_fault_and_judge_recovery_only_when_the_run_ends(tmp_path):
+    """An exercise's `recover_within` measure names the faults: a trainee reads the figures, so until
+    the run's last figures (`ended`) the goal says it is judged at the end, and the faults section
+    is never there."""
+    overrides = {"faults": [{"name": "slow", "kind": "belt_failure", "target": "belt", "speed": 0.5, "at": 1.0}],
+                 "exercise": {"task": "Keep the bottles coming.",
+                              "goals": [{"delivered": 1}, {"recover_within": 30, "name": "recovered"}]}}
+    with Bus(BusSettings()) as bus, hub(ROOT / "scenarios" / "source_sink.yaml", tmp_path, overrides, bus=bus) \
+            as master:
+        master.run()
+        broadcast = master.link.view
+        running = broadcast.figures_message(master.tick, 1.0)
+        ended = broadcast.figures_message(master.tick, 1.0, ended=True)
+        assert "faults" in [s.key for s in master.summary().sections]   # the summary keeps it
+    assert "faults" not in running["sections"] and "faults" not in ended["sections"]
+    goals = {g["name"]: g for g in running["sections"]["exercise"]["goals"]}
+    assert goals["recovered"]["met"] is None and goals["recovered"]["measured"] == "judged when the run ends"
+    assert [g["met"] for name, g in goals.items() if name != "recovered"] == [True]   # the others live
+    final = {g["name"]: g for g in ended["sections"]["exercise"]["goals"]}
+    assert final["recovered"]["met"] is True and final["recovered"]["measured"].startswith("slow: ")
