@@ -105,10 +105,10 @@ def test_belts_sensors_and_switches_are_named_by_tags_and_on_hover_and_the_legen
     teacher.check("#labels")
     tags = teacher.evaluate("window.planthub.labels()")
     named = sorted((t["kind"], t["object"]) for t in tags)
-    assert named == [("belt", "sw"), ("part", "sw"), ("trigger", "branch_end"), ("trigger", "main_end"),
-                     ("trigger", "reader")], named
+    assert named == [("belt", "sw"), ("belt", "sw"), ("part", "sw"), ("trigger", "branch_end"),
+                     ("trigger", "main_end"), ("trigger", "reader")], named   # the switch's main belt and branch
     assert sorted(teacher.eval_on_selector_all("#tags .tag", "ts => ts.map(t => t.textContent)")) == \
-        ["branch_end", "main_end", "reader", "sw", "sw"]
+        ["branch_end", "main_end", "reader", "sw", "sw", "sw"]
 
     reader = next(t for t in tags if t["object"] == "reader")
     teacher.mouse.move(*reader["at"])

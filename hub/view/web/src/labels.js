@@ -1,5 +1,5 @@
-// Name tags on the 3D plant: one per belt, sensor and switch blade or gate, named after its object
-// and placed above it, drawn as HTML over the canvas (crisp at any zoom, no font textures). Off
+// Name tags on the 3D plant: one per belt (each belt of a switch its own), sensor and switch blade
+// or gate, named after its object and placed above it, drawn as HTML over the canvas (crisp at any zoom, no font textures). Off
 // by default — a plant of a hundred parts is a wall of names — and turned on with the Labels box.
 
 import * as THREE from 'three';
@@ -24,7 +24,7 @@ export class Labels {
     plant.root.traverse((o) => {
       const d = o.userData;
       if (!o.isMesh || !d?.object || !(d.kind in TAGGED)) return;
-      const key = `${d.kind}\u0000${d.object}`;
+      const key = `${d.kind}\u0000${d.object}\u0000${d.kind === 'belt' ? d.field ?? '' : ''}`;
       if (!boxes.has(key)) boxes.set(key, { object: d.object, kind: d.kind, box: new THREE.Box3() });
       boxes.get(key).box.expandByObject(o);
     });
@@ -32,6 +32,11 @@ export class Labels {
       const centre = box.getCenter(new THREE.Vector3());
       const anchor = centre.clone();
       anchor.z = box.max.z + ABOVE;
+      if (kind === 'belt') {   // a quarter of the way along: a switch's blade sits at its main belt's middle
+        const size = box.getSize(new THREE.Vector3());
+        if (size.x >= size.y) anchor.x -= size.x / 4;
+        else anchor.y -= size.y / 4;
+      }
       const element = document.createElement('span');
       element.className = `tag ${kind}`;
       element.dataset.object = object;

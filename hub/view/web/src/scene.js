@@ -49,7 +49,7 @@ function stripeTexture() {
 }
 
 function tag(mesh, item) {
-  mesh.userData = { object: item.object, kind: item.kind };
+  mesh.userData = { object: item.object, kind: item.kind, field: item.field };
   return mesh;
 }
 
