@@ -318,3 +318,95 @@ def fixed_hit(fields, rows, times, dt, positions, velocities, pulls, ahead, radi
             if gap < radii[m] + across + FIXED_MARGIN:
                 out[i] = True
     return out
+
+
+def grown(extents, growth, ahead, rows, times, dt):
+    return extents + growth * (max(ahead[rows]) * times * dt) if len(rows) else extents
+
+
+def near(fields, rows, times, dt, b, free, against, parts, fixed) -> np.ndarray:
+    """transport._near: touching a body or a moving part (its box headed as far as the furthest
+    look), or reaching a fixed box."""
+    centres, extents, growth = parts
+    out = touching(fields, rows, b["play"], times, dt, b["positions"], b["orientations"], b["velocities"],
+                   b["spins"], b["radii"], b["half_heights"], b["ahead"], b["most"], b["pulls"], free, free, against,
+                   centres, grown(extents, growth, b["ahead"], rows, times, dt))
+    if fixed is not None:
+        out |= fixed_hit(fields, rows, times, dt, b["positions"], b["velocities"], b["pulls"], b["ahead"], b["radii"],
+                         b["half_heights"], *fixed)
+    return out
+
+
+def on_belt(fields, rows, now, times, dt, positions, velocities, pulls, ahead):
+    """transport._on_belt: (ok, still, stays) per row."""
+    ok, still, stays = (np.zeros(len(rows), bool) for _ in range(3))
+    for i, n in enumerate(rows):
+        k = now[i]
+        if k < 0:
+            continue
+        m = ahead[n] * times
+        there_point = positions[n] + velocities[n] * (m * dt)
+        there = field_of(fields, there_point)[0]
+        if there < 0 or fields.surfaces[k] != fields.surfaces[there]:
+            continue
+        grow = m * (m + 1.0) / 2.0 * dt
+        stays[i] = there == k and field_of(fields, there_point + np.append(pulls[n] * grow, 0.0))[0] == k
+        still[i] = still_on(fields.speeds[k], velocities[n])
+        ok[i] = not still[i]
+    return ok, still, stays
+
+
+def leave(fields, rows, dt, b, free, joined, parts, fixed):
+    """transport._leave after the pulls: of `rows`, those steady, standing on a belt's surface
+    (within SINK), on it 2 × their look-ahead on and touching nothing then: (go, near)."""
+    from hub.physics.transport import RISE, SINK
+    p, q, v, w = b["positions"], b["orientations"], b["velocities"], b["spins"]
+    riding, field = np.zeros(len(rows), bool), np.full(len(rows), -1)
+    for i, n in enumerate(rows):
+        upright = (1.0 - 2.0 * (q[n, 0] ** 2 + q[n, 1] ** 2) > math.cos(TILT) and (w[n] ** 2).sum() < SPIN * SPIN
+                   and abs(v[n, 2]) < RISE)
+        k = field_of(fields, p[n])[0]
+        if (free[n] or upright) and k >= 0 and abs(p[n, 2] - b["half_heights"][n] - fields.surfaces[k]) < SINK:
+            riding[i], field[i] = True, k
+    ok = on_belt(fields, rows[riding], field[riding], 2.0, dt, p, v, b["pulls"], b["ahead"])[0]
+    at = np.flatnonzero(riding)[ok]
+    these = rows[at]
+    centres, extents, growth = parts
+    close = touching(fields, these, b["play"], 2.0, dt, p, q, v, w, b["radii"], b["half_heights"], b["ahead"],
+                     b["most"], b["pulls"], free, joined, np.ones(len(free), bool), centres,
+                     grown(extents, growth, b["ahead"], these, 2.0, dt))
+    if fixed is not None:
+        close |= fixed_hit(fields, these, 2.0, dt, p, v, b["pulls"], b["ahead"], b["radii"], b["half_heights"], *fixed)
+    go, near_ = np.zeros(len(rows), bool), np.zeros(len(rows), bool)
+    go[at], near_[at] = ~close, close
+    return go, near_
+
+
+def look(fields, tick, whole, rows, awake, dt, b, clear, free, parts, fixed):
+    """transport._look after the pulls: (due, back, ok, still, near, now) and `clear` set."""
+    from hub.physics.transport import LONG
+    ahead = b["ahead"]
+    due = np.array([whole or clear[n] < tick + ahead[n] for n in rows], bool)
+    back = np.zeros(len(rows), bool)
+    others = rows[~due]
+    if len(others) and len(awake):
+        against = np.zeros(len(free), bool)
+        against[awake] = True
+        centres, extents, growth = parts
+        back[~due] = touching(fields, others, b["play"], 1.0, dt, b["positions"], b["orientations"], b["velocities"],
+                              b["spins"], b["radii"], b["half_heights"], ahead, b["most"], b["pulls"], free, free,
+                              against, centres, grown(extents, growth, ahead, others, 1.0, dt))
+    seen = rows[due]
+    now = field_of(fields, b["positions"][seen]) if len(seen) else np.zeros(0, int)
+    everyone = np.ones(len(free), bool)
+    ok, still, stays = on_belt(fields, seen, now, float(LONG), dt, b["positions"], b["velocities"], b["pulls"], ahead)
+    near_ = near(fields, seen, float(LONG), dt, b, free, everyone, parts, fixed)
+    clear[seen] = tick + LONG * ahead[seen]
+    short = ~ok | ~stays | near_
+    if short.any():
+        these = seen[short]
+        ok1, still1, _ = on_belt(fields, these, now[short], 1.0, dt, b["positions"], b["velocities"], b["pulls"], ahead)
+        ok[short], still[short] = ok1, still1
+        near_[short] = near(fields, these, 1.0, dt, b, free, everyone, parts, fixed)
+        clear[these] = tick + ahead[these]
+    return due, back, ok, still, near_, now

@@ -452,3 +452,67 @@ def test_the_physics_tests_pass_with_the_jit_off():
     done = subprocess.run([sys.executable, "-m", "pytest", "tests/physics", "-q", "-x", "-m", "not slow",
                            "-p", "no:cacheprovider"], cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+
+
+# --- free transport: the whole look and the leaving, in one call each ----------------------------------
+def look_scene(rng):
+    """A belt scene at a look: pulls taken afresh by _pulls (tested above) and fixed boxes listed
+    where each bottle stands (_relist, tested above), so that both kernel and reference start there."""
+    fields = belts(rng)
+    b = bodies(rng, 30, spread=0.4)
+    b["velocities"] *= rng.random((30, 1)) < 0.8
+    b["positions"][:, 2] = rng.choice([0.0, 0.005], 30) + b["half_heights"] + rng.uniform(-0.008, 0.008, 30)
+    b["play"] = np.sort(rng.choice(30, 26, replace=False)).astype(np.int64)
+    b["pulls"], b["most"] = np.zeros((30, 2)), np.zeros(30)
+    T._pulls(b["play"], b["positions"], b["velocities"], b["masses"], b["ahead"], DT, fields.explicit, b["pulls"],
+             b["most"], fields.table())
+    c, h, cos, sin = yawed_boxes(rng, int(rng.integers(1, 12)))
+    lists = (b["positions"].copy(), np.zeros((30, T.NEAR), np.int64), np.zeros(30, np.int64))
+    for n in range(30):
+        T._relist(n, b["positions"], b["radii"], b["half_heights"], *lists, c, h, cos, sin)
+    parts = (rng.uniform(-0.4, 0.4, (1, 3)), rng.uniform(0.005, 0.05, (1, 3)), rng.uniform(0, 0.5, (1, 3)))
+    return fields, b, parts, (c, h, cos, sin), lists
+
+
+def kernel_state(b):
+    return (b["positions"], b["orientations"], b["velocities"], b["spins"], b["masses"], b["radii"],
+            b["half_heights"], b["ahead"], b["most"].copy(), b["pulls"].copy())
+
+
+@SETTINGS
+@given(seeds)
+def test_which_awake_bottles_leave_the_engine(seed):
+    rng = np.random.default_rng(seed)
+    fields, b, parts, fixed, lists = look_scene(rng)
+    free = rng.random(30) < 0.3
+    joined = free | (rng.random(30) < 0.2)
+    rows = b["play"][rng.random(len(b["play"])) < 0.6]
+    p, q, v, w, m, r, hh, ahead, most, pulls = kernel_state(b)
+    go, near = T._leave(rows, b["play"], b["play"], DT, p, q, v, w, m, r, hh, ahead, most, pulls, free, joined,
+                        fields.straight_law, fields.surfaces, fields.speeds, fields.table(), fields.explicit, *parts,
+                        True, *lists, *fixed)
+    assert (most == b["most"]).all() and (pulls == b["pulls"]).all()   # taken afresh: the same again
+    expected = ref.leave(fields, rows, DT, b, free, joined, parts, fixed)
+    assert (go == expected[0]).all() and (near == expected[1]).all()
+
+
+@SETTINGS
+@given(seeds, st.booleans())
+def test_a_look_at_the_free_bottles(seed, whole):
+    rng = np.random.default_rng(seed)
+    fields, b, parts, fixed, lists = look_scene(rng)
+    free = np.zeros(30, bool)
+    rows = b["play"][rng.random(len(b["play"])) < 0.5]
+    free[rows] = True
+    awake = np.setdiff1d(b["play"], rows)[: int(rng.integers(0, 10))].astype(np.int64)
+    tick = 600
+    clear = np.where(rng.random(30) < 0.5, tick + 30, tick).astype(np.int64)
+    p, q, v, w, m, r, hh, ahead, most, pulls = kernel_state(b)
+    got_clear = clear.copy()
+    got = T._look(tick, whole, rows, b["play"], awake, b["play"], DT, p, q, v, w, m, r, hh, ahead, most, pulls,
+                  got_clear, free, fields.straight_law, fields.surfaces, fields.speeds, fields.table(),
+                  fields.explicit, *parts, True, *lists, *fixed)
+    expected = ref.look(fields, tick, whole, rows, awake, DT, b, clear, free, parts, fixed)
+    for name, a, e in zip(("due", "back", "ok", "still", "near", "now"), got, expected):
+        assert (a == e).all(), (name, a, e)
+    assert (got_clear == clear).all()
