@@ -165,7 +165,7 @@ def commands():
     ({"op": "force", "slot": "belt.drive.run", "value": 1}, "belt.drive.run is bool: expected true or false, got 1"),
     ({"op": "set", "slot": "stop.value.set"}, "stop.value.set is read by its own component within the step; "
                                                "command the slot that feeds it instead"),
-    ({"op": "freeze"}, "expected a map with op one of set, force, release, stop, pause, resume, step, pace, checkpoint, fault, repair, got {'op': 'freeze'}"),
+    ({"op": "freeze"}, "expected a map with op one of set, force, release, stop, pause, resume, step, pace, checkpoint, rewind, fault, repair, got {'op': 'freeze'}"),
 ])
 def test_bad_commands_are_named(commands, message, error):
     with pytest.raises(CommandError) as info:

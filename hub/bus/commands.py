@@ -20,6 +20,11 @@ point, recorded with its tick in `commands.csv`, and replayed from there bit for
 - `checkpoint`: the run is saved at the next point into its folder's `checkpoints/TICK.ckpt`
   (hub/run/checkpoint.py). Like the run's control it changes nothing the run computes: recorded
   and noted, and a replay goes past it.
+- `rewind TICK`: the run goes back to the checkpoint it took at or before TICK (this run's, at a
+  tick not past the present) and on from there (hub/run/rewind.py): the plant built again with
+  the checkpoint put in, the bus session and its participants kept. Recorded with the tick of the
+  checkpoint it went back to, so that a replay rewinds at the same point to the same state. Taken
+  once the point is complete; while the run is paused, at once.
 
 A target read by its own component within the step (a constant's or connector's input) cannot
 be commanded: command the slot that feeds it.
@@ -39,7 +44,8 @@ from hub.core.observer import Stop
 from hub.core.registry import did_you_mean
 from hub.core.slots import Direction, SlotType
 
-OPS = ("set", "force", "release", "stop", "pause", "resume", "step", "pace", "checkpoint", "fault", "repair")
+OPS = ("set", "force", "release", "stop", "pause", "resume", "step", "pace", "checkpoint", "rewind", "fault",
+       "repair")
 FAULTS = ("fault", "repair")   # a fault's begin and end: hub/run/faults.py
 CONTROL = ("pause", "resume", "step", "pace")   # the run's control: hub/run/hold.py
 MAX_STEPS = 100_000   # points one `step` may ask for
@@ -59,7 +65,7 @@ class Command:
 
     def value_text(self, kind: SlotType | None) -> str:
         """The value as JSON (empty where there is none), exact for every double."""
-        if self.op in ("step", "pace", *FAULTS):
+        if self.op in ("step", "pace", "rewind", *FAULTS):
             return json.dumps(self.value)
         if self.op in ("release", "stop") or kind in (None, SlotType.VOID):
             return ""
@@ -101,6 +107,7 @@ class Commands:
         self.stop_pending = False    # a stop came while the run was held: it ends the run at the next point
         self.control = None        # the run's control (hub/run/hold.py Hold): pause, resume, step, pace
         self.on_checkpoint = None  # asks for a checkpoint at this point (hub/run/checkpoint.py Checkpointer.request)
+        self.rewinds = None        # goes back to a checkpoint (hub/run/rewind.py Rewinder); None: refused
         self.stop_requested = False
         self.faults = None         # applies `fault` and `repair` (hub/run/faults.py FaultBook); None: refused
 
@@ -142,6 +149,11 @@ class Commands:
                 raise CommandError(f"pace takes a factor of real time above 0 and at most {MAX_PACE:g}, "
                                    f"got {_shown(factor)}")
             return Command("pace", value=float(factor), by=by)
+        if op == "rewind":
+            tick = message.get("value")
+            if isinstance(tick, bool) or not isinstance(tick, int) or tick < 0:
+                raise CommandError(f"rewind takes the tick to go back to (a whole number, 0 or more), got {_shown(tick)}")
+            return Command("rewind", value=tick, by=by)
         name = message.get("slot")
         if not isinstance(name, str) or name not in self.slots:
             raise CommandError(f"no slot {_shown(name)}{self._nearest(name)}")
@@ -204,6 +216,9 @@ class Commands:
                     self.on_checkpoint()
                 self._note_control(tick, command, "a checkpoint at this point")
                 continue
+            elif command.op == "rewind":
+                self._rewind(tick, command, now=False)
+                continue
             elif command.op in CONTROL:
                 # When points are computed is no part of the results: recorded for a replay, which
                 # runs through, and noted in bus_log.csv — events.csv holds only what the plant did.
@@ -257,6 +272,12 @@ class Commands:
                 if command.op == "checkpoint" and self.on_checkpoint is None:
                     raise CommandError("checkpoint: this run has no folder to write checkpoints into "
                                        "(planthub run --out)")
+                if command.op == "rewind":
+                    refused = (self.rewinds.refuse(tick, command.value) if self.rewinds is not None else
+                               "rewind: this run keeps no checkpoints to go back to: it has no folder "
+                               "(planthub run --out)")
+                    if refused:
+                        raise CommandError(refused)
             except (CommandError, wire.WireError) as exc:
                 self._answer(payload, tick, str(exc), instructor)
                 continue
@@ -276,9 +297,18 @@ class Commands:
             if command.op in CONTROL:
                 self.control.apply(command)
                 self._note_control(tick, command)
+            elif command.op == "rewind":   # the held point is complete: back at once, still held
+                self._rewind(tick, command, now=True)
             else:
                 self._waiting.append(command)
                 self.stop_pending |= command.op == "stop"
+
+    def _rewind(self, tick: int, command: Command, now: bool) -> None:
+        """Ask for the rewind (at the end of this point, or `now` while held), recorded with the
+        tick of the checkpoint it goes back to: what a replay goes back to."""
+        back = self.rewinds.request(tick, command, now)
+        self._note_control(tick, Command("rewind", value=back, by=command.by),
+                           f"back to the checkpoint at tick {back}, asked for tick {command.value}")
 
     def _note_control(self, tick: int, command: Command, what: str = "the run's control") -> None:
         self.recorder.command(tick, command.op, "", command.value_text(None), command.by)
@@ -295,6 +325,15 @@ class Commands:
             ident = ""
         results = self._instructor_results if instructor else self._results
         results.put(wire.pack({"id": ident, "ok": error is None, "tick": tick, "error": error or ""}))
+
+    def rebind(self, plant) -> None:
+        """Work on `plant`, built again by a rewind (hub/run/rewind.py): its components, and no
+        force of the abandoned branch (a checkpoint holds those of the faults in effect)."""
+        owners = {(c.obj, c.name): c for c in plant.components}
+        self._owner = {index: owners[(ref.obj, ref.component)] for ref, index in plant.index.items()}
+        for held in (self._forced, self._own, self._released):
+            held.clear()
+        self._once.clear()
 
     def apply(self, signals, direction: Direction) -> None:
         """Write the commanded values of this direction's slots (sources after sensing, targets after flows).

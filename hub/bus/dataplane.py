@@ -114,6 +114,16 @@ class DataPlane:
             out.offer(tick, None, (), fired)
         out.lend()
 
+    def rebind(self, plant) -> None:
+        """Publish `plant`, built again by a rewind (hub/run/rewind.py): the same slots on the same
+        keys, computed by its components (what subscribers watch, they compute)."""
+        owners = {(c.obj, c.name): c for c in plant.components}
+        self.plant = plant
+        for entry in self.exposed:
+            if entry.component is not None:
+                entry.component = owners[(entry.ref.obj, entry.ref.component)]
+        self._refresh_needed()
+
     def close(self) -> None:
         """Send what waits and the last point skipped, if none went out after it, and stop the
         sender (within a second or two: hub/bus/outbox.py)."""

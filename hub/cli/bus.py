@@ -48,15 +48,17 @@ def add_commands(sub, parents=(), formatter=argparse.HelpFormatter, epilog: str 
                "--by alice\n\n" + epilog)
     send.add_argument("run", help="the run's name (the scenario's name)")
     send.add_argument("op", choices=["set", "force", "release", "stop", "pause", "resume", "step", "pace",
-                                     "checkpoint", "fault", "repair"],
+                                     "checkpoint", "rewind", "fault", "repair"],
                       help="set: the slot takes the value at the next point; force: at every point until release; "
                            "stop: the run ends after the next point; pause, resume; step N: N points while "
                            "paused; pace F: F × real time (a --realtime run); checkpoint: the run saved at the "
-                           "next point into its folder's checkpoints/TICK.ckpt; fault PART MAP, repair PART "
+                           "next point into its folder's checkpoints/TICK.ckpt; rewind TICK: the run back to its "
+                           "checkpoint at or before tick TICK, and on from there; fault PART MAP, repair PART "
                            "'{name: N}': an instructor's, sent on the instructor's key (schemas/README.md "
                            "\"Faults and exercises\")")
     send.add_argument("slot", nargs="?", default="",
-                      help="object.component.slot (for set, force, release); for step and pace: the number")
+                      help="object.component.slot (for set, force, release); for step, pace and rewind: the "
+                           "number")
     send.add_argument("value", nargs="?", help="the value, read as YAML (0.2, true, [0, 0, 1]); for set and force")
     send.add_argument("--connect", action="append", required=True, metavar="ENDPOINT", help="the hub's endpoint")
     send.add_argument("--by", default="", help="who sends it (logged with the command)")
@@ -113,7 +115,7 @@ def _send(parser, args) -> int:
 
     tls = tls_settings(parser, args)
     value = yaml.safe_load(args.value) if args.value is not None else None
-    if args.op in ("step", "pace"):   # `planthub send RUN step 3`: the number stands where a slot would
+    if args.op in ("step", "pace", "rewind"):   # `planthub send RUN step 3`: the number stands where a slot would
         value, args.slot = (yaml.safe_load(args.slot) if args.slot else None), ""
     ident = uuid.uuid4().hex
     inbox = Inbox()

@@ -9,7 +9,7 @@ from hub.core.observer import Observer, StopCondition
 from hub.core.registry import load_entry
 from hub.logic.watchdog import WATCHDOG
 from hub.run.bus_link import BusLink
-from hub.run.checkpoint import Checkpointer
+from hub.run.checkpoint import Checkpointer, Taken
 from hub.run.checkpoint import apply as put_back
 from hub.run.ending import ending
 from hub.run.hold import Hold
@@ -17,6 +17,7 @@ from hub.run.interruption import Interruption
 from hub.run.master import Master, RunResult
 from hub.run.plant import Plant
 from hub.run.recorder import Recorder
+from hub.run.rewind import Rewinder, hand_over_participants
 from hub.run.summary import RunSummary, logic_components
 from hub.scenario.checker import Scenario
 from hub.scenario.expectations import Expectation, Watcher
@@ -47,7 +48,8 @@ class Run:
     - `resume`: a checkpoint's bytes (hub/run/checkpoint.py) and where they came from: `start`
       puts the run at its communication point, and the run goes on from there.
     - `checkpoints`: (ticks, every) — save the run at those ticks and every `every` ticks into
-      `out/checkpoints/TICK.ckpt`.
+      `out/checkpoints/TICK.ckpt`. A run with a folder may be rewound to one of its checkpoints
+      (`rewind TICK`, hub/run/rewind.py): `replant` puts the plant built again in the old one's place.
     """
 
     def __init__(self, scenario: Scenario, *, out: Path | None = None, bus=None, replay=None, pacer=None,
@@ -63,6 +65,7 @@ class Run:
         self.resumed = None       # the checkpoint's header once it is put back (hub/run/checkpoint.py)
         self.wall_seconds = 0.0   # spent in run (and in Simulation.run_until)
         self._started = self._closed = False
+        self.every_source = every_source
         self.plant = Plant(scenario, every_source=every_source)
         try:
             plant = self.plant
@@ -75,7 +78,7 @@ class Run:
                 stops = [self.interruption, *stops]
             # Imported here: replaying needs the bus package's command parser, not a bus.
             from hub.bus.commands import Commands, load_commands
-            from hub.run.faults import Board, FaultBook, FaultSchedule, FaultsState
+            from hub.run.faults import Board, FaultBook, FaultSchedule
             # Faults begin and end as commands (hub/run/faults.py): the scenario's schedule gives
             # them to a Commands of their own; a replay's recorded commands hold them instead.
             self.faults = FaultBook(plant)
@@ -97,16 +100,8 @@ class Run:
                 schedule = FaultSchedule(plant, scenario.faults, scheduled)
                 manipulators = [schedule, scheduled]
             self.schedule = schedule
-            self.contributed = _contributions(scenario, plant)
-            from hub.run.exercise import FaultsFigure, Score  # the faults that began, the exercise's score
-            faulted = [FaultsFigure(self.faults, rate), FaultsState(self.faults, schedule)]
-            if scenario.faults or any(c.op == "fault" for _, c in recorded or ()):
-                self.contributed += faulted
-            elif live:   # in the summary and a checkpoint from the first live fault on: a run without
-                # one keeps the files, summary and checkpoints of a run that could take none
-                self.faults.on_first = lambda: self.contributed.extend(faulted)
-            if scenario.exercise is not None:
-                self.contributed.append(Score(scenario.exercise, self.contributed, self.faults, rate))
+            self._live = live
+            self.contributed = self._contribute(plant, scenario.faults or any(c.op == "fault" for _, c in recorded or ()))
             self.bodies = None   # the body recording, for playback (run.record_bodies)
             if self.out is not None and scenario.run.record_bodies:
                 from hub.view.bodies_file import BodyRecorder  # pyarrow is loaded only for it
@@ -123,13 +118,19 @@ class Run:
             self.watcher = Watcher([e for e in scenario.expect if isinstance(e, Expectation)], plant.index, rate)
             watchers = [*self.contributed, self.watcher, *observers]
             ticks, every = checkpoints
-            self.checkpointer = None
+            self.checkpointer = self.rewinder = None
             if (ticks or every) and self.out is None:
                 raise SimulationError("checkpoints are written into the run's folder: give it one (--out)")
-            if self.out is not None:   # at given ticks, and when an operator asks (`checkpoint`)
+            # A replay keeps in memory the checkpoints its recorded rewinds went back to.
+            keep = {c.value for _, c in recorded or () if c.op == "rewind"}
+            if self.out is not None or keep:   # at given ticks, and when an operator asks (`checkpoint`)
                 # Last of the observers: a checkpoint holds what every other one made of its point.
-                self.checkpointer = Checkpointer(self, self.out / "checkpoints", ticks, every, log=self.log)
+                self.checkpointer = Checkpointer(self, self.out / "checkpoints" if self.out is not None else None,
+                                                 ticks, every, log=self.log, keep=keep)
                 watchers.append(self.checkpointer)
+                self.rewinder = Rewinder(self)
+                if commands is not None:
+                    commands.rewinds = self.rewinder
             self.master = Master(
                 plant,
                 observers=[self.recorder, *([self.bodies] if self.bodies else []), *([self.link] if self.link else []),
@@ -160,6 +161,7 @@ class Run:
                         self.master.manipulators[at:at + 1] = []
                         self.scheduled = None
                     live.on_checkpoint = self.checkpointer.request if self.checkpointer is not None else None
+                    live.rewinds = self.rewinder
                     self.master.manipulators.append(live)
                     self.master.hold = Hold(live, pacer=self.master.pacer, state=self.link.lockstep.publish_state,
                                             idle=self.link.idle)
@@ -168,6 +170,9 @@ class Run:
             if self.resume is not None:   # participants are on the bus by now: their state goes to them
                 data, where = self.resume
                 self.resumed = put_back(self, data, where)
+                if self.checkpointer is not None:   # a rewind may go back to where the run resumed
+                    tick = self.resumed.tick
+                    self.checkpointer.taken[tick] = Taken(tick, None, data, self.recorder.marks())
         except BaseException:
             self.master.close("the run failed")
             raise
@@ -178,6 +183,56 @@ class Run:
         result = self.master.run(until_tick)
         self.wall_seconds += result.wall_seconds
         return result
+
+    def _contribute(self, plant, faulted: bool) -> list:
+        """The observers and stop conditions of `plant` that the scenario's modules contribute, then
+        the faults' figures and state (`faulted`; or from the first live fault on, in a run that
+        may take one) and the exercise's score."""
+        from hub.run.exercise import FaultsFigure, Score  # the faults that began, the exercise's score
+        from hub.run.faults import FaultsState
+
+        scenario, rate = self.scenario, self.scenario.run.physics_rate
+        contributed = _contributions(scenario, plant)
+        faults = [FaultsFigure(self.faults, rate), FaultsState(self.faults, self.schedule)]
+        if faulted:
+            contributed += faults
+        elif self._live:   # in the summary and a checkpoint from the first live fault on: a run without
+            # one keeps the files, summary and checkpoints of a run that could take none
+            self.faults.on_first = lambda: self.contributed.extend(faults)
+        if scenario.exercise is not None:
+            contributed.append(Score(scenario.exercise, contributed, self.faults, rate))
+        return contributed
+
+    def replant(self, plant: Plant, faulted: bool) -> Plant:
+        """A rewind's (hub/run/rewind.py): `plant`, built again from the scenario, takes the old
+        plant's place, with the faults' book and schedule and the contributed observers made anew
+        for it (`faulted`: with the faults' parts, as the checkpoint to put in has them); the live
+        commands, the bus link and the master work on it from now on. The participants on the bus
+        stay (hand_over_participants). Returns the old plant, for the caller to close."""
+        from hub.run.faults import Board, FaultBook, FaultSchedule
+
+        old, book, schedule = self.plant, self.faults, self.schedule
+        hand_over_participants(old, plant)
+        self.plant = plant
+        self.faults = FaultBook(plant)
+        self.faults.timed = book.timed
+        if book.commands is not None:
+            self.faults.attach(book.commands)
+        replaced = {}
+        if schedule is not None:
+            self.schedule = FaultSchedule(plant, self.scenario.faults, schedule.commands)
+            replaced[id(schedule)] = self.schedule
+        for commands in {id(c): c for c in (self.commands, self.scheduled, book.commands) if c is not None}.values():
+            commands.rebind(plant)
+        before = self.contributed
+        self.contributed = self._contribute(plant, faulted)
+        made = _by_kind(self.contributed)
+        for key, part in _by_kind(before).items():
+            replaced[id(part)] = made.get(key)
+        self.master.rebind(plant, replaced)
+        if self.link is not None:
+            self.link.rebind(plant, looks=self.contributed, faults=Board(self.faults, self.schedule))
+        return old
 
     @property
     def tick(self) -> int:
@@ -254,6 +309,19 @@ class Run:
     def __exit__(self, *exc):
         self.failure = exc[1]
         self.close("the run failed" if exc[0] is not None else "closed")
+
+
+def _by_kind(parts: list) -> dict[str, object]:
+    """Parts by class and occurrence: a part made for a plant built again finds its counterpart."""
+    out = {}
+    for part in parts:
+        name = f"{type(part).__module__}.{type(part).__qualname__}"
+        key, n = name, 1
+        while key in out:
+            n += 1
+            key = f"{name}#{n}"
+        out[key] = part
+    return out
 
 
 def _contributions(scenario: Scenario, plant) -> list:

@@ -10,6 +10,7 @@ from hub.bus.lockstep import Lockstep
 from hub.bus.session import Bus, local_endpoint
 from hub.bus.settings import BusSettings, exposure
 from hub.bus.wire import check_run_name
+from hub.core.observer import BodyLook
 from hub.view.broadcast import Broadcast
 
 _log = logging.getLogger(__name__)
@@ -63,6 +64,19 @@ class BusLink:
                                  rate=plant.world.rate, log=self._notice, warn=self.log, logs=self.logs)
         self.lockstep.start(plant.world.tick)
         return live
+
+    def rebind(self, plant, looks, faults) -> None:
+        """Serve `plant`, built again by a rewind (hub/run/rewind.py), with its contributed `looks`
+        and the instructor's board `faults`: the same keys, viewers and participants."""
+        self.plant, self.looks, self.faults = plant, looks, faults
+        if self.dataplane is not None:
+            self.dataplane.rebind(plant)
+        if self.view is not None:
+            # The view's feed reads the world and the looks at each point; its scene (the plant's
+            # structure, the same for a plant built again) and its subscribers stay.
+            view = self.view
+            view.plant, view.world, view.faults = plant, plant.world, faults
+            view.looks = [look for look in looks if isinstance(look, BodyLook)]
 
     def _notice(self, text: str) -> None:
         self.recorder.notice(self.plant.world.tick, text)

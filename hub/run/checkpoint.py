@@ -172,31 +172,81 @@ def read(path: Path) -> bytes:
         raise CheckpointError(f"{path}: cannot read the checkpoint: {exc.strerror or exc}") from None
 
 
+@dataclass(frozen=True)
+class Taken:
+    """A checkpoint of the run's line (what a rewind may go back to): its file, or its bytes when
+    it is kept in memory only, and where the run's files ended at it (Recorder.marks)."""
+
+    tick: int
+    path: Path | None
+    data: bytes | None
+    marks: dict | None
+
+    def bytes(self) -> bytes:
+        return self.data if self.data is not None else read(self.path)
+
+    @property
+    def where(self) -> str:
+        return str(self.path) if self.path is not None else f"the checkpoint at tick {self.tick}"
+
+
 class Checkpointer:
     """An observer that saves the run at given ticks and every `every` ticks, after every other
-    observer has seen the point, to `folder/TICK.ckpt` (`planthub run --checkpoint-at/-every`)."""
+    observer has seen the point, to `folder/TICK.ckpt` (`planthub run --checkpoint-at/-every`),
+    and at the ticks in `keep` into memory only (the points a replay's rewinds go back to).
 
-    def __init__(self, run, folder: Path, ticks=(), every: int | None = None, log=None):
+    `taken` holds the checkpoints of the line the run is on, by tick: a rewind goes back to one
+    of them, and forgets those after it (`forget_after`), whose files it moves to
+    `folder/branchN/`."""
+
+    def __init__(self, run, folder: Path | None, ticks=(), every: int | None = None, log=None, keep=()):
         self.run = run
-        self.folder = Path(folder)
+        self.folder = Path(folder) if folder is not None else None
         self.ticks = set(ticks)
         self.every = every
+        self.keep = set(keep)
         self.log = log
         self.written: list[Path] = []
+        self.taken: dict[int, Taken] = {}
         self.requested = False
+
+    def at_or_before(self, tick: int) -> Taken | None:
+        """The latest checkpoint of the run's line at or before `tick`, or None."""
+        found = [t for t in self.taken if t <= tick]
+        return self.taken[max(found)] if found else None
+
+    def forget_after(self, tick: int, branch: int) -> list[Path]:
+        """Forget the checkpoints after `tick` (a rewind's abandoned branch); their files go to
+        `folder/branchN/`. Returns where they went."""
+        moved = []
+        for t in sorted(t for t in self.taken if t > tick):
+            taken = self.taken.pop(t)
+            if taken.path is not None and taken.path.exists():
+                place = taken.path.parent / f"branch{branch}" / taken.path.name
+                place.parent.mkdir(exist_ok=True)
+                taken.path.replace(place)
+                moved.append(place)
+        return moved
 
     def request(self) -> None:
         """Save the run at the point being computed (an operator's `checkpoint` command)."""
         self.requested = True
 
     def observe(self, tick: int, signals, events) -> None:
-        if self.requested or tick in self.ticks or (self.every and tick and tick % self.every == 0):
-            self.requested = False
+        saved = self.folder is not None and (
+            self.requested or tick in self.ticks or (self.every and tick and tick % self.every == 0))
+        if not (saved or tick in self.keep):
+            return
+        self.requested = False
+        data = capture(self.run, in_point=True)
+        path = None
+        if saved:
             path = self.folder / f"{tick}.ckpt"
-            write(path, capture(self.run, in_point=True))
+            write(path, data)
             self.written.append(path)
             if self.log is not None:
                 self.log(f"checkpoint at t = {tick / self.run.scenario.run.physics_rate:g} s: {path}")
+        self.taken[tick] = Taken(tick, path, None if saved else data, self.run.recorder.marks())
 
     def close(self, reason: str) -> None:
         """Nothing to release: each checkpoint is complete once written."""

@@ -72,8 +72,6 @@ class Master:
 
     def __init__(self, plant: Plant, *, observers: list[Observer] = (), stops: list[StopCondition] = (),
                  manipulators=(), pacer=None, hold=None):
-        self.plant = plant
-        self.world = plant.world
         self.observers = list(observers)
         self.stops = list(stops)
         self.manipulators = list(manipulators)   # take(tick) -> events, apply(signals, direction)
@@ -81,6 +79,14 @@ class Master:
         self.hold = hold   # hub/run/hold.py: an operator's pause, resume and single steps
         self._closed = False
         self.stopped: Stop | None = None   # set, the run is over (an operator's stop, its orders out)
+        self._bind(plant)
+        self.communicated = False
+        self._answering = False   # the last step ended early on an event
+        self.then = None          # called once this point is complete: a rewind asked at it (hub/run/rewind.py)
+
+    def _bind(self, plant: Plant) -> None:
+        self.plant = plant
+        self.world = plant.world
         comps = plant.components
         # Only components that do something in a hook are called: a scene of 100 bottles should
         # not pay 200 empty calls per communication step.
@@ -88,8 +94,14 @@ class Master:
                          and not (c.QUIET_UNLESS_NEEDED and not c.needed)]
         self._actuating = [c for c in comps if type(c).actuate is not Component.actuate]
         self._events = EventRows(comps)
-        self.communicated = False
-        self._answering = False   # the last step ended early on an event
+
+    def rebind(self, plant: Plant, replaced: dict[int, object]) -> None:
+        """Step `plant`, built again by a rewind (hub/run/rewind.py), from now on: each observer,
+        stop condition and manipulator made for the old plant gives way to the one made for the new
+        (`replaced`: id of the old → the new, or None where there is none now)."""
+        self._bind(plant)
+        for parts in (self.observers, self.stops, self.manipulators):
+            parts[:] = [p for p in (replaced.get(id(p), p) for p in parts) if p is not None]
 
     @property
     def tick(self) -> int:
@@ -115,6 +127,9 @@ class Master:
         for observer in self.observers:
             observer.observe(tick, signals, events)
         self.communicated = True
+        if self.then is not None:
+            then, self.then = self.then, None
+            then()
 
     def advance(self, until_tick: int | None = None) -> None:
         """Steps 5 and 6 of the loop: one communication step's physics and logic.

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import ClassVar
 
+from hub.core.files import written
 from hub.core.signals import Signals
 from hub.core.slots import SlotRef, SlotType
 
@@ -49,6 +50,8 @@ class Recorder:
     bus (a pause for a lost participant, the resumption). It is kept apart from events.csv, which
     holds only what the plant did: a pause depends on the wall clock and the network, so no
     re-run reproduces it, while events.csv and recording.csv of a replay equal the original's.
+    A rewind (hub/run/rewind.py) cuts recording.csv and events.csv back to its checkpoint's point
+    (`marks`, `cut`) and writes what it cut beside, in recording.branchN.csv and events.branchN.csv.
     """
 
     columns: list[tuple[SlotRef, SlotType, int]]   # (slot, type, index in the plant's Signals)
@@ -60,6 +63,7 @@ class Recorder:
 
     def __post_init__(self):
         self._files = []
+        self._named = {}   # file name → its handle
         self._flush_due = 0.0
         self._rows = self._events = self._commands = self._notices = None
         if self.directory is not None:
@@ -76,6 +80,7 @@ class Recorder:
     def _open(self, name: str):
         handle = open(self.directory / name, "w", newline="", encoding="utf-8")
         self._files.append(handle)
+        self._named[name] = handle
         return csv.writer(handle, lineterminator="\n")
 
     def observe(self, tick: int, signals: Signals, events) -> None:
@@ -126,6 +131,44 @@ class Recorder:
             self._notices = self._open("bus_log.csv")
             self._notices.writerow(["time", "tick", "detail"])
         self._notices.writerow([repr(tick / self.rate), tick, detail])
+
+    #: the files a rewind cuts back: what the plant did (commands.csv and bus_log.csv keep every branch)
+    BRANCHED = ("recording.csv", "events.csv")
+
+    def marks(self) -> dict[str, int] | None:
+        """Where recording.csv and events.csv end now, in bytes (None without a folder): taken with a
+        checkpoint, after this point's row, so that a rewind to it can cut them back there."""
+        if self.directory is None:
+            return None
+        out = {}
+        for name in self.BRANCHED:
+            handle = self._named[name]
+            handle.flush()
+            out[name] = handle.tell()
+        return out
+
+    def cut(self, marks: dict[str, int] | None, branch: int) -> list[Path]:
+        """Cut recording.csv and events.csv back to `marks` (Recorder.marks); what followed goes,
+        under the file's header, to NAME.branchN.csv beside it. Returns the files written."""
+        if self.directory is None or marks is None:
+            return []
+        made = []
+        for name in self.BRANCHED:
+            handle = self._named[name]
+            handle.flush()
+            path = self.directory / name
+            with open(path, "rb") as whole:
+                header = whole.readline()
+                whole.seek(marks[name])
+                after = whole.read()
+            stem, suffix = name.rsplit(".", 1)
+            beside = self.directory / f"{stem}.branch{branch}.{suffix}"
+            with written(beside, "wb") as out:
+                out.write(header + after)
+            handle.seek(marks[name])
+            handle.truncate()
+            made.append(beside)
+        return made
 
     def close(self, reason: str = "") -> None:
         for handle in self._files:
