@@ -15,8 +15,10 @@ SPIN_AT_REST = 0.01   # rad/s: a bottle spinning slower than this about the vert
 # The columns of the regions' table (ForceFields.table), one row a region: what compiled loops
 # take as one array — a compiled call pays for each array it is given, and the most after the
 # engine's step has cleared the caches (30 arrays: 15 µs a call, one: 6).
-OX, OY, COS, SIN, ARC, TURN, RADIUS, ANGLE0, LENGTH, HALF_WIDTH, Z_LO, Z_HI, RATE, PER_MASS, SPEED, SURFACE, LIMIT \
-    = range(17)
+# HEIGHT: the belt surface's height; STRAIGHT: straight with its law scaled by the mass (`straight_law`).
+OX, OY, COS, SIN, ARC, TURN, RADIUS, ANGLE0, LENGTH, HALF_WIDTH, Z_LO, Z_HI, RATE, PER_MASS, SPEED, SURFACE, LIMIT, \
+    HEIGHT, STRAIGHT = range(19)
+COLUMNS = 19
 
 
 class ForceFields:
@@ -139,19 +141,20 @@ class ForceFields:
         return _nearest(np.ascontiguousarray(points, float), self.table())
 
     def table(self) -> np.ndarray:
-        """(regions, 17): every region's centre line, half width, heights and law, in the columns
+        """(regions, COLUMNS): every region's centre line, half width, heights and law, in the columns
         named above (booleans as 0 and 1) — made again only after a region is added; a speed is
         set in it as in `speeds`."""
         if self._table is None:
             lines, n = self.lines, len(self.lines)
-            table = np.zeros((n, 17))
+            table = np.zeros((n, COLUMNS))
             if n:
                 table[:, OX], table[:, OY] = lines.origin[:, 0], lines.origin[:, 1]
             for column, values in ((COS, lines.cos), (SIN, lines.sin), (ARC, lines.is_arc), (TURN, lines.turn),
                                    (RADIUS, lines.radius), (ANGLE0, lines.angle0), (LENGTH, lines.length),
                                    (HALF_WIDTH, self.half_widths), (Z_LO, self.z_lo), (Z_HI, self.z_hi),
                                    (RATE, self.rates), (PER_MASS, self.per_mass), (SPEED, self.speeds),
-                                   (SURFACE, self.surface), (LIMIT, self.limits)):
+                                   (SURFACE, self.surface), (LIMIT, self.limits), (HEIGHT, self.surfaces),
+                                   (STRAIGHT, self.straight_law)):
                 table[:, column] = values
             self._table = table
         return self._table

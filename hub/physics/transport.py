@@ -65,7 +65,7 @@ from numba import njit
 
 from hub.physics._quiet import quiet_stderr
 from hub.physics.changes import BeltSpeed, Gripped, LetGo, Parked, Tipped, reached
-from hub.physics.fields import ARC, field_at, law_at
+from hub.physics.fields import ARC, HEIGHT, SPEED, STRAIGHT, field_at, law_at
 from hub.physics.rest import SHAPE_MARGIN, bound, boxes, extent, turning
 
 with quiet_stderr():
@@ -122,7 +122,7 @@ class FreeTransport:
         self.left = 0                       # and came back
         self.started = 0                    # how many times a resting bottle rode off free (from_rest)
         self.stopped = 0                    # and a free one came to rest without the engine (_settle)
-        self._fixed = None                  # (centres, half extents, cos, sin) of fixed boxes
+        self._fixed = _NO_BOXES             # fixed boxes, one a row: centre, half extents, cos and sin of the yaw
         self._moving = None                 # MovingParts, tested at every look (their boxes move)
         self.offsets = np.zeros(0)          # per body: where a belt grips it, its centre's height over that (arm)
         self._parts_at_rest = None          # their boxes while none moves
@@ -158,7 +158,7 @@ class FreeTransport:
             c = np.array([b[0] for b in fixed_boxes], float)
             h = np.array([b[1] for b in fixed_boxes], float)
             yaw = np.array([b[2] for b in fixed_boxes], float)
-            self._fixed = (c, h, np.cos(yaw), np.sin(yaw))
+            self._fixed = np.column_stack((c, h, np.cos(yaw), np.sin(yaw)))
         self._moving = moving
         self.offsets = np.zeros(len(self.free))
         for row, offset in offsets.items():
@@ -173,18 +173,18 @@ class FreeTransport:
         _grow(out, np.asarray(pool, np.int64), b.positions, b.radii, b.half_heights)
         return out
 
-    def _part_boxes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The moving parts' boxes (centres, half extents) as the wake rule widens them for one
-        tick, and how fast each half extent grows with the time a look goes forward (a part headed
-        on along its axis: `_grown`); while none moves, the same boxes at every look."""
+    def _part_boxes(self) -> np.ndarray:
+        """The moving parts' boxes as the wake rule widens them for one tick, one a row: centre,
+        half extents, and how fast each half extent grows with the time a look goes forward (a part
+        headed on along its axis: `_grown`); while none moves, the same boxes at every look."""
         moving = self._moving
         if moving is None or not moving.parts:
             return _NO_PARTS
         if not moving.moving and self._parts_at_rest is not None:
             return self._parts_at_rest
         parts = [(p.box(), p) for p in moving.parts]
-        boxes = (np.array([box[0] for box, _ in parts], float), np.array([box[1] for box, _ in parts], float),
-                 np.array([np.abs(p.axis) * abs(p.velocity) for _, p in parts], float))
+        boxes = np.hstack((np.array([box[0] for box, _ in parts], float), np.array([box[1] for box, _ in parts], float),
+                           np.array([np.abs(p.axis) * abs(p.velocity) for _, p in parts], float)))
         self._parts_at_rest = None if moving.moving else boxes
         return boxes
 
@@ -216,16 +216,14 @@ class FreeTransport:
                 positions[n] = centre
         whole = bool(placed or moving or self._everything)
         self._everything = False
-        fields, fixed = self.fields, self._fixed
-        centres, extents, growth = self._part_boxes()
+        fields = self.fields
         # One compiled call for the whole look (`_look`): its tests' arrays cross into it once.
         due, back, ok, still, near, now = _look(
             tick, whole, rows, b.in_play_rows() if b.moved_rows is None else b.moved_rows,
             np.asarray(awake, np.int64), b.in_play_rows(), self.dt, positions, b.orientations, b.velocities,
             b.angular_velocities, b.masses, b.radii, b.half_heights, self.ahead, self.most, self.pulls, self.clear,
-            self.free, fields.straight_law, fields.surfaces, fields.speeds, fields.table(), fields.explicit,
-            centres, extents, growth, fixed is not None, self.listed_at, self.near, self.near_count,
-            *(fixed if fixed is not None else _NO_BOXES))
+            self.free, fields.table(), fields.explicit, self._part_boxes(), self.listed_at, self.near, self.near_count,
+            self._fixed)
         settle = None
         if due.any():
             look = rows[due]
@@ -373,14 +371,12 @@ class FreeTransport:
         of its surface) and passing the tests `2·ahead` ticks forward; and those that ride a belt
         but are near something (`joined`: who may form a train). Every pull is taken afresh
         first, for `pulled` (`_pulls`). One compiled call (`_leave`)."""
-        b, fields, fixed = self.bodies, self.fields, self._fixed
-        centres, extents, growth = self._part_boxes()
+        b, fields = self.bodies, self.fields
         go, near = _leave(np.asarray(rows, np.int64), np.asarray(pulled, np.int64), b.in_play_rows(), self.dt,
                           b.positions, b.orientations, b.velocities, b.angular_velocities, b.masses, b.radii,
-                          b.half_heights, self.ahead, self.most, self.pulls, self.free, joined, fields.straight_law,
-                          fields.surfaces, fields.speeds, fields.table(), fields.explicit, centres, extents, growth,
-                          fixed is not None, self.listed_at, self.near, self.near_count,
-                          *(fixed if fixed is not None else _NO_BOXES))
+                          b.half_heights, self.ahead, self.most, self.pulls, self.free, joined, fields.table(),
+                          fields.explicit, self._part_boxes(), self.listed_at, self.near, self.near_count,
+                          self._fixed)
         return rows[go], rows[near]
 
     # --- the tick itself --------------------------------------------------------------------
@@ -466,9 +462,10 @@ class FreeTransport:
 
 @njit(cache=True)
 def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at, near, near_count,
-               straight_law, table, c, h, cos, sin):
+               table, boxes):
     """(len(rows),): whether each of `rows`, headed on for `times` × its look-ahead (n ticks),
-    could reach a fixed box (c, h, cos, sin: their centres, half extents and yaws).
+    could reach a fixed box (`boxes`, FreeTransport._fixed: centre, half extents, cos and sin of
+    the yaw, one a row).
 
     Its way: n ticks at its velocity v, plus what the belt's pull adds — a pull that does
     not grow (the relaxing law, or friction's constant cap; a belt's speed change looks
@@ -493,12 +490,13 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
     (`_slides`).
 
     Row by row and, for each, box by box of its list (listed again first where it is stale)."""
+    c, h, cos, sin = boxes[:, 0:3], boxes[:, 3:6], boxes[:, 6], boxes[:, 7]
     hit = np.zeros(rows.shape[0], np.bool_)
     for i in range(rows.shape[0]):
         n_ = rows[i]
         if (math.hypot(positions[n_, 0] - listed_at[n_, 0], positions[n_, 1] - listed_at[n_, 1]) > LIST / 2.0
                 or abs(positions[n_, 2] - listed_at[n_, 2]) > LIST / 2.0):
-            _relist(n_, positions, radii, half_heights, listed_at, near, near_count, c, h, cos, sin)
+            _relist(n_, positions, radii, half_heights, listed_at, near, near_count, boxes)
         if near_count[n_] > near.shape[1]:
             hit[i] = True
             continue
@@ -518,7 +516,7 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
         gx, gy = ux * along, uy * along
         widen = across + FIXED_MARGIN
         px, py = positions[n_, 0], positions[n_, 1]
-        straight = _belt(n_, n, dt, positions, velocities, pulls, straight_law, table) >= 0
+        straight = _belt(n_, n, dt, positions, velocities, pulls, table) >= 0
         # The list holds every box its way can reach only while the way, widened, stays within
         # LIST/2 of where it is (it is within LIST/2 of where it was listed): a longer way (a fast
         # bottle over a long look) is tested against every box, those out of its reach skipped.
@@ -546,7 +544,7 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
 
 
 @njit(cache=True)
-def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, surfaces, speeds, table):
+def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, table):
     """(ok, still, stays), each (len(rows),): riding a belt now (`now`: the field under each)
     and, `times` × its look-ahead on, one at the same height, not coming to a stop on a still
     belt (ok); on a belt, coming to a stop on a still one (still); on the same belt all the
@@ -563,12 +561,12 @@ def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, surfaces
         y = positions[n, 1] + velocities[n, 1] * (m * dt)
         z = positions[n, 2] + velocities[n, 2] * (m * dt)
         there = field_at(x, y, z, table)
-        if there < 0 or surfaces[k] != surfaces[there]:
+        if there < 0 or table[k, HEIGHT] != table[there, HEIGHT]:
             continue
         grow = m * (m + 1.0) / 2.0 * dt
         stays[i] = there == k and field_at(x + pulls[n, 0] * grow, y + pulls[n, 1] * grow, z, table) == k
         vx, vy = velocities[n, 0], velocities[n, 1]
-        still[i] = speeds[k] == 0.0 and vx * vx + vy * vy < STILL * STILL
+        still[i] = table[k, SPEED] == 0.0 and vx * vx + vy * vy < STILL * STILL
         ok[i] = not still[i]
     return ok, still, stays
 
@@ -621,9 +619,10 @@ def _advance(rows, positions, orientations, velocities, masses, offsets, dt, exp
 
 
 @njit(cache=True)
-def _relist(n, positions, radii, half_heights, listed_at, near, near_count, c, h, cos, sin):
-    """Body `n`'s list: the fixed boxes its upright footprint is within LIST of, horizontally and
-    in height, the first NEAR of them, and how many there are."""
+def _relist(n, positions, radii, half_heights, listed_at, near, near_count, boxes):
+    """Body `n`'s list: the fixed boxes (`_fixed_hit`) its upright footprint is within LIST of,
+    horizontally and in height, the first NEAR of them, and how many there are."""
+    c, h, cos, sin = boxes[:, 0:3], boxes[:, 3:6], boxes[:, 6], boxes[:, 7]
     count = 0
     for k in range(c.shape[0]):
         if abs(positions[n, 2] - c[k, 2]) > h[k, 2] + half_heights[n] + FIXED_MARGIN + LIST:
@@ -692,7 +691,7 @@ def _box_distance(x, y, hx, hy):
 
 @njit(cache=True)
 def _touching(rows, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most,
-              pulls, free, joined, against, straight_law, table, part_centres, part_extents):
+              pulls, free, joined, against, table, part_centres, part_extents):
     """(len(rows),): whether each of `rows` could touch another body in play (or of `among`)
     or a moving part within `times` × its look-ahead. Their bounds first (rest.bound; pairs
     found by a sweep along the plant's longer axis when there are many), then for each pair
@@ -715,8 +714,8 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
     comes too (`FreeTransport._trains`).
 
     `play`: the bodies in play (sorted, holds `rows`); `against`: a mask of the bodies they are
-    looked at against; `joined`: the bodies that may form a train; `straight_law`: per field,
-    straight with its law scaled by the mass; `table`: ForceFields.table; the moving parts'
+    looked at against; `joined`: the bodies that may form a train; `table`: ForceFields.table
+    (its STRAIGHT column: straight with its law scaled by the mass); the moving parts'
     boxes (part_centres, part_extents). Pairs by their bounds (rest.bound), found along the
     plant's longer axis from each row outwards. Only `rows` and the bodies of `against` are
     bounded and sorted."""
@@ -788,14 +787,14 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
                         or abs(positions[na, 2] - positions[no, 2]) >= reach):
                     continue      # their bounds do not meet
                 if _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights,
-                         ahead, most, pulls, belt, farthest, straight_law, table, reaches, steady, joined):
+                         ahead, most, pulls, belt, farthest, table, reaches, steady, joined):
                     touching[i] = True
     return touching
 
 
 @njit(cache=True)
 def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most, pulls,
-          belt, farthest, straight_law, table, reaches, steady, joined):
+          belt, farthest, table, reaches, steady, joined):
     """Whether bodies play[a] and play[o] could touch within the look (`_touching`);
     not when they are a train: both joined, on one straight belt whose law scales with the mass
     and staying on it, at the same velocity and not turning — the law moves them alike."""
@@ -814,7 +813,7 @@ def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, rad
         way = (closing + rock) * n * dt
         for q in (a, o):
             if belt[q] == -2:
-                belt[q] = _belt(play[q], farthest, dt, positions, velocities, pulls, straight_law, table)
+                belt[q] = _belt(play[q], farthest, dt, positions, velocities, pulls, table)
         one_belt = belt[a] >= 0 and belt[a] == belt[o]
         if not one_belt:
             way += (most[na] + most[no]) * n * (n + 1.0) / 2.0 * dt   # the most each may be pulled (_pulls)
@@ -835,12 +834,12 @@ def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, rad
 
 
 @njit(cache=True)
-def _belt(n, m, dt, positions, velocities, pulls, straight_law, table):
+def _belt(n, m, dt, positions, velocities, pulls, table):
     """The straight belt with a mass-scaled law body `n` stands on and stays on for `m` ticks at
     its velocity and pull, or −1."""
     x, y, z = positions[n, 0], positions[n, 1], positions[n, 2]
     now = field_at(x, y, z, table)
-    if now < 0 or not straight_law[now]:
+    if now < 0 or table[now, STRAIGHT] == 0.0:
         return -1
     # Its way lies in the parallelogram of its velocity's way and the pull's: all four corners on
     # the belt (a band, convex) keep all of it there.
@@ -879,15 +878,15 @@ def _grown(extents, growth, ahead, rows, times, dt):
 
 @njit(cache=True)
 def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, velocities, spins, masses, radii,
-          half_heights, ahead, most, pulls, clear, free, straight_law, surfaces, speeds, table, explicit, part_centres,
-          part_extents, part_growth, has_fixed, listed_at, near_list, near_count, c, h, cos, sin):
+          half_heights, ahead, most, pulls, clear, free, table, explicit, parts, listed_at, near_list, near_count, boxes):
     """FreeTransport.release_near's look at the free `rows`, in one call: every pull taken afresh
     (`_pulls`, for `pulled`); the rows not due for a whole look against the bodies `awake` in
     the engine; those due (all when `whole`) LONG look-aheads forward, and what that finds near
     one look-ahead forward, each by `_on_belt`, `_touching` and `_fixed_hit`, with `clear` set to
     the tick their look holds to. Returns (due, back, ok, still, near, now): per row whether it
     was due and whether the look against the awake bodies found it near; per row due, riding on
-    (ok), coming to a stop on a still belt (still), near something (near), and its field now."""
+    (ok), coming to a stop on a still belt (still), near something (near), and its field now.
+    `table`: ForceFields.table; `parts`: FreeTransport._part_boxes; `boxes`: the fixed boxes (`_fixed_hit`)."""
     most[:] = 0.0
     if pulled.shape[0]:
         _pulls(pulled, positions, velocities, masses, ahead, dt, explicit, pulls, most, table)
@@ -901,8 +900,8 @@ def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, v
         against = np.zeros(free.shape[0], np.bool_)
         against[awake] = True
         found = _touching(others, play, 1.0, dt, positions, orientations, velocities, spins, radii, half_heights,
-                          ahead, most, pulls, free, free, against, straight_law, table, part_centres,
-                          _grown(part_extents, part_growth, ahead, others, 1.0, dt))
+                          ahead, most, pulls, free, free, against, table, parts[:, 0:3],
+                          _grown(parts[:, 3:6], parts[:, 6:9], ahead, others, 1.0, dt))
         k = 0
         for i in range(count):
             if not due[i]:
@@ -919,21 +918,17 @@ def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, v
         now[i] = field_at(positions[n, 0], positions[n, 1], positions[n, 2], table)
     everyone = np.ones(free.shape[0], np.bool_)
     # LONG look-aheads forward first, then what that finds near, or off its belt, one forward.
-    ok, still, stays = _on_belt(look, now, float(LONG), dt, positions, velocities, pulls, ahead, surfaces, speeds,
-                                table)
+    ok, still, stays = _on_belt(look, now, float(LONG), dt, positions, velocities, pulls, ahead, table)
     near = _near(look, float(LONG), play, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
-                 most, pulls, free, everyone, straight_law, table, part_centres, part_extents, part_growth,
-                 has_fixed, listed_at, near_list, near_count, c, h, cos, sin)
+                 most, pulls, free, everyone, table, parts, listed_at, near_list, near_count, boxes)
     for i in range(m):
         clear[look[i]] = tick + LONG * ahead[look[i]]
     short = np.flatnonzero(~ok | ~stays | near)
     if short.shape[0]:
         these = look[short]
-        ok1, still1, _ = _on_belt(these, now[short], 1.0, dt, positions, velocities, pulls, ahead, surfaces, speeds,
-                                  table)
+        ok1, still1, _ = _on_belt(these, now[short], 1.0, dt, positions, velocities, pulls, ahead, table)
         near1 = _near(these, 1.0, play, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
-                      most, pulls, free, everyone, straight_law, table, part_centres, part_extents, part_growth,
-                      has_fixed, listed_at, near_list, near_count, c, h, cos, sin)
+                      most, pulls, free, everyone, table, parts, listed_at, near_list, near_count, boxes)
         for j in range(short.shape[0]):
             i = short[j]
             ok[i], still[i], near[i] = ok1[j], still1[j], near1[j]
@@ -943,22 +938,20 @@ def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, v
 
 @njit(cache=True)
 def _near(rows, times, play, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most, pulls,
-          free, against, straight_law, table, part_centres, part_extents, part_growth, has_fixed, listed_at,
-          near_list, near_count, c, h, cos, sin):
+          free, against, table, parts, listed_at, near_list, near_count, boxes):
     """`_touching` or `_fixed_hit`, for `_look`."""
     near = _touching(rows, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
-                     most, pulls, free, free, against, straight_law, table, part_centres,
-                     _grown(part_extents, part_growth, ahead, rows, times, dt))
-    if has_fixed:
+                     most, pulls, free, free, against, table, parts[:, 0:3],
+                     _grown(parts[:, 3:6], parts[:, 6:9], ahead, rows, times, dt))
+    if boxes.shape[0]:
         near = near | _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at,
-                                 near_list, near_count, straight_law, table, c, h, cos, sin)
+                                 near_list, near_count, table, boxes)
     return near
 
 
 @njit(cache=True)
 def _leave(rows, pulled, play, dt, positions, orientations, velocities, spins, masses, radii, half_heights, ahead,
-           most, pulls, free, joined, straight_law, surfaces, speeds, table, explicit, part_centres, part_extents,
-           part_growth, has_fixed, listed_at, near_list, near_count, c, h, cos, sin):
+           most, pulls, free, joined, table, explicit, parts, listed_at, near_list, near_count, boxes):
     """FreeTransport._leaving in one call: every pull afresh (`_pulls`, for `pulled`), then of
     `rows` those steady (upright, tilt under TILT, spin under SPIN, vertical speed under RISE, or
     free) with their base on a belt's surface, on it 2 ×
@@ -978,21 +971,21 @@ def _leave(rows, pulled, play, dt, positions, orientations, velocities, spins, m
                             and abs(velocities[n, 2]) < RISE)):
             continue
         k = field_at(positions[n, 0], positions[n, 1], positions[n, 2], table)
-        if k >= 0 and abs(positions[n, 2] - half_heights[n] - surfaces[k]) < SINK:
+        if k >= 0 and abs(positions[n, 2] - half_heights[n] - table[k, HEIGHT]) < SINK:
             riding[i], field[i] = True, k
     these = rows[riding]
-    ok = _on_belt(these, field[riding], 2.0, dt, positions, velocities, pulls, ahead, surfaces, speeds, table)[0]
+    ok = _on_belt(these, field[riding], 2.0, dt, positions, velocities, pulls, ahead, table)[0]
     go, near = np.zeros(count, np.bool_), np.zeros(count, np.bool_)
     these = these[ok]
     if these.shape[0] == 0:
         return go, near
     close = _touching(these, play, 2.0, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
-                      most, pulls, free, joined, np.ones(free.shape[0], np.bool_), straight_law, table, part_centres,
-                      _grown(part_extents, part_growth, ahead, these, 2.0, dt))
-    if has_fixed and not close.all():
+                      most, pulls, free, joined, np.ones(free.shape[0], np.bool_), table, parts[:, 0:3],
+                      _grown(parts[:, 3:6], parts[:, 6:9], ahead, these, 2.0, dt))
+    if boxes.shape[0] and not close.all():
         rest = these[~close]
         hit = _fixed_hit(rest, 2.0, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at, near_list,
-                         near_count, straight_law, table, c, h, cos, sin)
+                         near_count, table, boxes)
         k = 0
         for j in range(close.shape[0]):
             if not close[j]:
@@ -1004,5 +997,5 @@ def _leave(rows, pulled, play, dt, positions, orientations, velocities, spins, m
     return go, near
 
 
-_NO_PARTS = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
-_NO_BOXES = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0))
+_NO_PARTS = np.zeros((0, 9))   # moving parts' boxes: centre, half extents, growth (FreeTransport._part_boxes)
+_NO_BOXES = np.zeros((0, 8))   # fixed boxes: centre, half extents, cos and sin of the yaw (_fixed_hit)

@@ -83,6 +83,11 @@ def bodies(rng, n, spread=0.5):
                 masses=rng.uniform(0.02, 0.5, n), ahead=rng.integers(2, 9, n).astype(float))
 
 
+def fixed_table(c, h, cos, sin):
+    """The fixed boxes as free transport's kernels take them (FreeTransport._fixed)."""
+    return np.column_stack((c, h, cos, sin))
+
+
 def yawed_boxes(rng, m):
     c = np.column_stack((rng.uniform(-0.6, 0.6, (m, 2)), rng.uniform(0.0, 0.1, m)))
     h = np.column_stack((rng.uniform(0.002, 0.3, m), rng.uniform(0.002, 0.05, m), rng.uniform(0.02, 0.06, m)))
@@ -283,7 +288,7 @@ def test_a_bottles_list_holds_the_fixed_boxes_within_reach_of_it(seed):
     size = int(rng.integers(1, 8))
     listed_at, near, count = np.zeros((20, 3)), np.zeros((20, size), np.int64), np.zeros(20, np.int64)
     for n in range(20):
-        T._relist(n, b["positions"], b["radii"], b["half_heights"], listed_at, near, count, c, h, cos, sin)
+        T._relist(n, b["positions"], b["radii"], b["half_heights"], listed_at, near, count, fixed_table(c, h, cos, sin))
         found, total = ref.listed(n, b["positions"], b["radii"], b["half_heights"], c, h, cos, sin, size)
         assert list(near[n, :len(found)]) == found and count[n] == total
         assert (listed_at[n] == b["positions"][n]).all()
@@ -304,10 +309,10 @@ def test_a_bottles_way_reaches_a_fixed_box_as_against_every_box(seed, times, fas
     listed_at = p - np.column_stack((rng.uniform(-1, 1, (30, 2)) * (T.LIST / 2.0 / math.sqrt(2.0)), np.zeros(30)))
     near, count = np.zeros((30, T.NEAR), np.int64), np.zeros(30, np.int64)
     for n in range(30):
-        T._relist(n, listed_at, b["radii"], b["half_heights"], listed_at.copy(), near, count, c, h, cos, sin)
+        T._relist(n, listed_at, b["radii"], b["half_heights"], listed_at.copy(), near, count, fixed_table(c, h, cos, sin))
     rows = np.arange(30, dtype=np.int64)
     got = T._fixed_hit(rows, times, DT, p, v, b["pulls"], b["ahead"], b["radii"], b["half_heights"], listed_at,
-                       near, count, fields.straight_law, fields.table(), c, h, cos, sin)
+                       near, count, fields.table(), fixed_table(c, h, cos, sin))
     expected = ref.fixed_hit(fields, rows, times, DT, p, v, b["pulls"], b["ahead"], b["radii"], b["half_heights"],
                              c, h, cos, sin)
     assert (got == expected).all(), np.flatnonzero(got != expected)
@@ -329,8 +334,7 @@ def test_whether_a_bottle_rides_on_its_belt_over_a_look(seed, times):
     p, v, ahead = b["positions"], b["velocities"], b["ahead"]
     rows = np.arange(30, dtype=np.int64)
     now = fields.which(p)
-    ok, still, stays = T._on_belt(rows, now, times, DT, p, v, b["pulls"], ahead, fields.surfaces, fields.speeds,
-                                  fields.table())
+    ok, still, stays = T._on_belt(rows, now, times, DT, p, v, b["pulls"], ahead, fields.table())
     for n in rows:
         k, m = now[n], ahead[n] * times
         there_point = p[n] + v[n] * (m * DT)
@@ -341,7 +345,7 @@ def test_whether_a_bottle_rides_on_its_belt_over_a_look(seed, times):
         assert stays[n] == (riding and there == k and ref.field_of(fields, pulled)[0] == k)
         assert still[n] == (riding and ref.still_on(fields.speeds[k], v[n]))
         assert ok[n] == (riding and not still[n])
-        assert T._belt(n, m, DT, p, v, b["pulls"], fields.straight_law, fields.table()) == ref.on_one_belt(
+        assert T._belt(n, m, DT, p, v, b["pulls"], fields.table()) == ref.on_one_belt(
             fields, n, m, DT, p, v, b["pulls"])
 
 
@@ -412,7 +416,7 @@ def test_the_bodies_a_free_bottle_could_touch_are_found_by_every_pair_alike(seed
     T._pulls(play, p, v, b["masses"], b["ahead"], DT, fields.explicit, pulls, most, fields.table())
     parts = (rng.uniform(-0.4, 0.4, (2, 3)), rng.uniform(0.005, 0.05, (2, 3)))
     got = T._touching(rows, play, times, DT, p, b["orientations"], v, b["spins"], b["radii"], b["half_heights"],
-                      b["ahead"], most, pulls, free, joined, against, fields.straight_law, fields.table(), *parts)
+                      b["ahead"], most, pulls, free, joined, against, fields.table(), *parts)
     expected = ref.touching(fields, rows, play, times, DT, p, b["orientations"], v, b["spins"], b["radii"],
                             b["half_heights"], b["ahead"], most, pulls, free, joined, against, *parts)
     assert (got == expected).all(), np.flatnonzero(got != expected)
@@ -469,7 +473,7 @@ def look_scene(rng):
     c, h, cos, sin = yawed_boxes(rng, int(rng.integers(1, 12)))
     lists = (b["positions"].copy(), np.zeros((30, T.NEAR), np.int64), np.zeros(30, np.int64))
     for n in range(30):
-        T._relist(n, b["positions"], b["radii"], b["half_heights"], *lists, c, h, cos, sin)
+        T._relist(n, b["positions"], b["radii"], b["half_heights"], *lists, fixed_table(c, h, cos, sin))
     parts = (rng.uniform(-0.4, 0.4, (1, 3)), rng.uniform(0.005, 0.05, (1, 3)), rng.uniform(0, 0.5, (1, 3)))
     return fields, b, parts, (c, h, cos, sin), lists
 
@@ -489,8 +493,7 @@ def test_which_awake_bottles_leave_the_engine(seed):
     rows = b["play"][rng.random(len(b["play"])) < 0.6]
     p, q, v, w, m, r, hh, ahead, most, pulls = kernel_state(b)
     go, near = T._leave(rows, b["play"], b["play"], DT, p, q, v, w, m, r, hh, ahead, most, pulls, free, joined,
-                        fields.straight_law, fields.surfaces, fields.speeds, fields.table(), fields.explicit, *parts,
-                        True, *lists, *fixed)
+                        fields.table(), fields.explicit, np.hstack(parts), *lists, fixed_table(*fixed))
     assert (most == b["most"]).all() and (pulls == b["pulls"]).all()   # taken afresh: the same again
     expected = ref.leave(fields, rows, DT, b, free, joined, parts, fixed)
     assert (go == expected[0]).all() and (near == expected[1]).all()
@@ -510,8 +513,7 @@ def test_a_look_at_the_free_bottles(seed, whole):
     p, q, v, w, m, r, hh, ahead, most, pulls = kernel_state(b)
     got_clear = clear.copy()
     got = T._look(tick, whole, rows, b["play"], awake, b["play"], DT, p, q, v, w, m, r, hh, ahead, most, pulls,
-                  got_clear, free, fields.straight_law, fields.surfaces, fields.speeds, fields.table(),
-                  fields.explicit, *parts, True, *lists, *fixed)
+                  got_clear, free, fields.table(), fields.explicit, np.hstack(parts), *lists, fixed_table(*fixed))
     expected = ref.look(fields, tick, whole, rows, awake, DT, b, clear, free, parts, fixed)
     for name, a, e in zip(("due", "back", "ok", "still", "near", "now"), got, expected):
         assert (a == e).all(), (name, a, e)
