@@ -123,6 +123,7 @@ class DataPlane:
             if entry.component is not None:
                 entry.component = owners[(entry.ref.obj, entry.ref.component)]
         self._refresh_needed()
+        self.outbox.reset(self.live)   # what subscribers watch goes out at the next point, due or not
 
     def close(self) -> None:
         """Send what waits and the last point skipped, if none went out after it, and stop the

@@ -73,10 +73,12 @@ class BusLink:
             self.dataplane.rebind(plant)
         if self.view is not None:
             # The view's feed reads the world and the looks at each point; its scene (the plant's
-            # structure, the same for a plant built again) and its subscribers stay.
+            # structure, the same for a plant built again) and its subscribers stay. Its clock
+            # starts again: the bodies at the next point, the real-time factor from there.
             view = self.view
             view.plant, view.world, view.faults = plant, plant.world, faults
             view.looks = [look for look in looks if isinstance(look, BodyLook)]
+            view._due, view._started = 0, None
 
     def _notice(self, text: str) -> None:
         self.recorder.notice(self.plant.world.tick, text)

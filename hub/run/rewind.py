@@ -100,12 +100,13 @@ class Rewinder:
         moved = run.checkpointer.forget_after(taken.tick, n)
         if run.master.pacer is not None:
             run.master.pacer.start(taken.tick)
-        kept = [p.name for p in beside] + ([f"checkpoints/branch{n}/"] if moved else [])
-        detail = (f"rewind to t = {taken.tick / rate:g} s (the checkpoint at or before tick {command.value}) from "
-                  f"t = {tick / rate:g} s" + (f" by {command.by}" if command.by else "")
-                  + (f"; the branch left: {', '.join(kept)}" if kept else ""))
+        # The event row says only what a replay does alike: not the tick asked for (a replay asks for
+        # the checkpoint's), nor which checkpoint files there were.
+        detail = (f"rewind to t = {taken.tick / rate:g} s from t = {tick / rate:g} s"
+                  + (f" by {command.by}" if command.by else "")
+                  + (f"; the branch left: {', '.join(p.name for p in beside)}" if beside else ""))
         run.recorder.event(taken.tick, "@run", detail)
-        run.log(detail)
+        run.log(detail + (f"; its checkpoints: {moved[0].parent}" if moved else ""))
 
 
 def hand_over_participants(old: Plant, new: Plant) -> None:
