@@ -45,6 +45,8 @@ NOT_STATE = {
     ("hub.run.recorder.Recorder", "_flush_due"): "when the files are next flushed: output, not state",
     ("hub.bus.dataplane.DataPlane", "_next_poll"): "a wall-clock time to look at the bus again",
     ("hub.view.broadcast.Broadcast", "_next_poll"): "a wall-clock time to look at the bus again",
+    ("hub.view.broadcast.Broadcast", "_tick"): "the last point sent to views, to send its figures again as the "
+                                               "run ends: what views were told, set again at the next point",
     ("hub.bus.lockstep.Lockstep", "tick"): _SESSION,
     ("hub.logic.remote.RemoteSlave", "sent"): _SESSION,
     **{("hub.bus.lockstep._Peer", name): _SESSION for name in ("from_tick", "pending", "result", "result_n", "sent_at")},
