@@ -78,6 +78,11 @@ class Fmu(Module):
                              "description": "s one step may take: past it the worker of an FMU in a child process "
                                             "is killed and an FMU in the hub ends the hub (a C call cannot be "
                                             "interrupted); either way the run stops naming it, with its files complete"},
+            "on_fault": {"enum": ["stop", "restart"], "default": "stop",
+                         "description": "with runs: child, a worker that crashes or hangs past step_timeout: stop "
+                                        "the run (stop), or start a new one from the FMU's state at the last "
+                                        "checkpoint, step it again to where the lost one was and go on "
+                                        "(restart: the same results, named in the summary)"},
             "on_bad_value": {"enum": ["stop", "hold"], "default": "stop",
                              "description": "a non-finite real from the logic: stop the run, or hold the last good value (logged)"},
             "join_timeout": {"type": "number", "exclusiveMinimum": 0, "default": 10,
@@ -110,6 +115,9 @@ class Fmu(Module):
         except FmuError as exc:
             return [(("file",), str(exc))]
         problems = []
+        if params.get("on_fault", "stop") == "restart" and params["runs"] != "child":
+            problems.append((("on_fault",), f"on_fault: restart goes with runs: child (an FMU in a worker process "
+                                            f"the hub can start again), not runs: {params['runs']}"))
         if "launch" in params and params["runs"] != "bus":
             problems.append((("launch",), f"launch goes with runs: bus (a process serving the FMU over the bus); "
                                           f"with runs: {params['runs']} the hub launches nothing"))
@@ -227,7 +235,8 @@ class Fmu(Module):
                           None, float(params["join_timeout"]), f"FMU {fmu.path.name}", tls=own)
         variables = (tuple(v for _, v in inputs), tuple(v for _, v in outputs))
         slave = make_slave(SlavePlan(params["runs"], spec, fmu=fmu, variables=variables,
-                                     step_timeout=float(params["step_timeout"]), integration=cls.integration(params)),
+                                     step_timeout=float(params["step_timeout"]), integration=cls.integration(params),
+                                     on_fault=params.get("on_fault", "stop")),
                            world.rate)
         as_pairs = lambda pairs: [(s.name, s.type is SlotType.VOID) for s, _ in pairs]
         every = round(params["step"] * world.rate) if "step" in params else None

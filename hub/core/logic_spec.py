@@ -59,6 +59,7 @@ OPTIONS = {
         "runs": {"enum": ["hub", "child"]},
         "step": {"type": "number", "exclusiveMinimum": 0},
         "on_bad_value": {"enum": ["stop", "hold"]},
+        "on_fault": {"enum": ["stop", "restart"]},
         "step_timeout": {"type": "number", "exclusiveMinimum": 0},
         "interface": {"enum": list(INTERFACES)},
         "solver": {"enum": list(SOLVERS)},

@@ -35,6 +35,7 @@ class SlavePlan:
     python: tuple[str, ...] | None = None
     step_timeout: float = 10.0   # s one step may take (a child is killed; the hub's own process is ended)
     integration: Integration | None = None   # an FMU's interface and, for model exchange, its solver
+    on_fault: str = "stop"       # an FMU in a child process that crashes or hangs: stop the run, or restart it
 
 
 def make_slave(plan: SlavePlan, rate: int) -> LogicSlave:
@@ -48,7 +49,8 @@ def make_slave(plan: SlavePlan, rate: int) -> LogicSlave:
         inputs, outputs = plan.variables
         if plan.transport == "child":
             return IsolatedFmu(plan.fmu, spec.name, list(inputs), list(outputs), dict(spec.parameters),
-                               step_timeout=plan.step_timeout, integration=plan.integration)
+                               step_timeout=plan.step_timeout, integration=plan.integration,
+                               restart=plan.on_fault == "restart")
         slave = open_fmu(plan.fmu, spec.name, list(inputs), list(outputs), dict(spec.parameters),
                          step_timeout=plan.step_timeout, integration=plan.integration)
         WATCHDOG.watch(slave)   # in the hub's own process: a hang past step_timeout ends the process

@@ -263,7 +263,9 @@ class Run:
                           tuple(f.section() for f in self.figures),
                           ending(self.master.stopped, self.master.tick, run.end_tick, run.physics_rate,
                                  closed=self._closed, failure=self.failure),
-                          logic_components(self.plant.components))
+                          logic_components(self.plant.components),
+                          tuple(r for c in self.plant.components for r in getattr(getattr(c, "slave", None),
+                                                                                  "restarts", ())))
 
     def close(self, reason: str = "closed") -> None:
         """End the run (participants told, files closed), write summary.json when there is a folder,

@@ -28,8 +28,9 @@ from hub.core.files import written
 FORMAT = 1
 MAGIC = b"planthub checkpoint\n"
 #: Object parameters that may differ between the run that saved and the one that resumes: where
-#: logic runs (in the hub, in a child process, over the bus) changes no result.
-_WHERE_LOGIC_RUNS = ("runs", "launch")
+#: logic runs (in the hub, in a child process, over the bus) changes no result, nor does whether
+#: a crashed worker is restarted (on_fault).
+_WHERE_LOGIC_RUNS = ("runs", "launch", "on_fault")
 
 
 @dataclass(frozen=True)

@@ -40,6 +40,7 @@ class RunSummary:
     sections: tuple[SummarySection, ...] = ()
     ended: Ending | None = None          # None: the run goes on (a summary taken mid-run)
     logic: frozenset[str] = frozenset()  # `object.component` of the logic components (logic_components)
+    restarts: tuple = ()                 # isolated FMUs restarted (hub/logic/isolated.py Restart), in order
 
     @property
     def plant(self):
@@ -77,6 +78,8 @@ class RunSummary:
         out = [f"planthub run {self.scenario}  ({self.path})"]
         if self.ended is not None:
             out.append(self.ended.line())
+        for n, restart in enumerate(self.restarts):
+            out.append(f"  {'restarted' if n == 0 else '':<12} {restart.line()}")
         for section in self.sections:
             out += section.lines()
         out.append(f"  simulated    {self.sim_seconds:.3f} s  ({self.ticks} ticks at {rate} Hz, "
@@ -115,6 +118,8 @@ class RunSummary:
                               "logic": self.is_logic(slot)}
                        for slot, s in self.events.items()},
             "files": self.files(),
+            **({"restarts": [{"instance": r.instance, "time": r.time, "from": r.since, "steps": r.steps,
+                              "cause": r.cause} for r in self.restarts]} if self.restarts else {}),
             **{s.key: s.as_dict() for s in self.sections},
         }
 
