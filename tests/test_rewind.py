@@ -235,3 +235,34 @@ def test_planthub_run_rewound_by_planthub_send_and_replayed_gives_the_same_files
     assert replayed.returncode == 0, replayed.stderr
     for name in FILES:
         assert (tmp_path / "replayed" / name).read_bytes() == (live / name).read_bytes(), name
+
+
+def test_a_resumed_run_rewinds_to_where_it_resumed(tmp_path, multibody_bottles):
+    """The checkpoint a run resumed from is one it may go back to: its files are cut back to their
+    headers, and it goes on as the run resumed from it did."""
+    from hub.bus.commands import Command
+
+    with Run(load_scenario(SWITCH), out=tmp_path / "saved", checkpoints=((150,), None)) as run:
+        run.run(300)
+    saved = tmp_path / "saved" / "checkpoints" / "150.ckpt"
+    _resumed(SWITCH, {}, saved, tmp_path / "resumed")
+    with Run(load_scenario(SWITCH), out=tmp_path / "rewound", resume=(checkpoint.read(saved), str(saved))) as run:
+        run.run(400)
+        assert run.rewinder.refuse(run.tick, 100) == ("rewind 100: no checkpoint at or before tick 100 "
+                                                      "(t = 0.666667 s); this run has checkpoints at ticks 150")
+        assert run.rewinder.request(run.tick, Command("rewind", value=200), now=True) == 150
+        assert run.tick == 150
+        run.run()
+    for name in ("recording.csv", "events.csv"):
+        rewound = (tmp_path / "rewound" / name).read_text().splitlines()
+        assert [line for line in rewound if "@run" not in line] == \
+            (tmp_path / "resumed" / name).read_text().splitlines(), name
+    assert len((tmp_path / "rewound" / "recording.branch1.csv").read_text().splitlines()) == 1 + 250
+
+
+def test_a_rewind_to_a_checkpoint_file_that_is_gone_is_refused(tmp_path):
+    with Run(load_scenario(SWITCH), out=tmp_path, checkpoints=((150,), None)) as run:
+        run.run(300)
+        (tmp_path / "checkpoints" / "150.ckpt").unlink()
+        assert run.rewinder.refuse(run.tick, 200) == \
+            f"rewind 200: its checkpoint {tmp_path / 'checkpoints' / '150.ckpt'} is gone"

@@ -50,12 +50,15 @@ class Rewinder:
         if target > tick:
             return (f"rewind {target}: tick {target} (t = {target / rate:g} s) is in the future: the run is at "
                     f"tick {tick} (t = {tick / rate:g} s)")
-        if run.checkpointer.at_or_before(target) is None:
+        taken = run.checkpointer.at_or_before(target)
+        if taken is None:
             have = sorted(run.checkpointer.taken)
             return (f"rewind {target}: no checkpoint at or before tick {target} (t = {target / rate:g} s); "
                     + (f"this run has checkpoints at ticks {', '.join(map(str, have))}" if have else
                        "this run has taken none yet (planthub run --checkpoint-at, --checkpoint-every, or "
                        "planthub send RUN checkpoint)"))
+        if taken.path is not None and not taken.path.is_file():
+            return f"rewind {target}: its checkpoint {taken.path} is gone"
         return None
 
     def request(self, tick: int, command, now: bool) -> int:
