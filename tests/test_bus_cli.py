@@ -25,7 +25,9 @@ def test_an_operator_stops_a_paced_run_and_the_replay_stops_at_the_same_tick(tmp
     endpoint = free_loopback_endpoint()
     with process("-m", "hub", "run", "scenarios/belt_ramp_participant.yaml", "--realtime", "2",
                  "--listen", endpoint, "--out", tmp_path / "live") as run:
-        sent = planthub("send", "belt_ramp_participant", "stop", "--connect", endpoint, "--by", "test")
+        # The hub may take seconds to start on a busy machine: the command waits for it up to 30 s.
+        sent = planthub("send", "belt_ramp_participant", "stop", "--connect", endpoint, "--by", "test",
+                        "--timeout", "30")
         out, err = run.communicate(timeout=60)
     assert sent.returncode == 0, sent.stderr
     assert sent.stdout.startswith("stop applied at tick ")

@@ -95,8 +95,8 @@ def test_a_view_that_serves_no_page_in_time_is_named_and_stopped():
     try:
         view.start(SimpleNamespace(settings=BusSettings(), endpoints=(free_loopback_endpoint(),)))
         with pytest.raises(PlanthubError) as info:
-            view.wait(timeout=2)
-        assert str(info.value) == "the run's view served no page within 2 s: the run was not started"
+            view.wait(timeout=6)   # by then the child has started and handles SIGTERM, even on a busy machine
+        assert str(info.value) == "the run's view served no page within 6 s: the run was not started"
         assert view.process.poll() is None, "it still waits for the scene"
     finally:
         view.stop()
