@@ -127,7 +127,7 @@ def test_belts_sensors_and_switches_are_named_by_tags_and_on_hover_and_the_legen
 
 def test_the_camera_lets_go_of_a_bottle_that_leaves_the_plant_and_the_score_shows_at_the_end(pages):
     teacher, pupil, _, errors = pages
-    teacher.wait_for_function("'A' in window.planthub.bodies()", timeout=30_000)
+    teacher.wait_for_function("'A' in window.planthub.bodies()", timeout=60_000)
     teacher.select_option("#follow", "A")
     assert teacher.input_value("#follow") == "A"
     # A runs along the main line into main_end, whose sink takes it out of the plant.
