@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from hub.bus import wire
 from hub.bus.live import Viewer
 from hub.bus.lockstep import pid_of
 from hub.bus.session import Bus, free_loopback_endpoint
@@ -77,6 +78,9 @@ def test_a_run_rewound_by_planthub_send_goes_on_as_one_resumed_from_its_checkpoi
         sent = _planthub("send", "switch", "rewind", "200", "--connect", endpoint, "--by", "trainer")
         thread.join(60)
         assert not thread.is_alive()
+        with Viewer("switch", [endpoint]) as view:   # the timeline an operator's panel shows
+            timeline = wire.unpack(view.bus.ask("plant/switch/@cosim/checkpoints").payload)
+        assert timeline["checkpoints"] == list(range(75, 1351, 75)) and timeline["rate"] == 150
     assert sent.returncode == 0, sent.stderr
     assert sent.stdout.startswith("rewind applied at tick ")
     at = int(sent.stdout.split()[-1])

@@ -99,7 +99,7 @@ def _configure_tls(config, tls: TlsSettings) -> None:
 # the authority but not named gets a connection and nothing through it.
 _WATCH_KEYS = ["plant/*/**", "plant/*/@cosim/hub", "plant/*/@cosim/state", "plant/*/@cosim/command/result",
                "plant/*/@cosim/viewer/**", "plant/*/@cosim/scene", "plant/*/@cosim/bodies",
-               "plant/*/@cosim/events", "plant/*/@cosim/figures"]
+               "plant/*/@cosim/events", "plant/*/@cosim/figures", "plant/*/@cosim/checkpoints"]
 _MESSAGES = ["put", "delete", "declare_subscriber", "query", "declare_queryable", "reply", "liveliness_token",
              "declare_liveliness_subscriber", "liveliness_query"]
 

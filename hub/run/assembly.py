@@ -111,7 +111,7 @@ class Run:
             if bus is not None or slaves:
                 self.link = BusLink(plant, self.recorder, slaves, bus, commands, log=self.log,
                                     looks=self.contributed, figures=lambda: self.figures,
-                                    faults=Board(self.faults, schedule),
+                                    faults=Board(self.faults, schedule), timeline=lambda: self.checkpointer,
                                     logs=self.out)   # what launched participants said: beside the run's files
             # The scenario's expectations are watched in every run, so that a checkpoint carries
             # what they saw whichever command took it and whichever resumes it.
@@ -171,8 +171,7 @@ class Run:
                 data, where = self.resume
                 self.resumed = put_back(self, data, where)
                 if self.checkpointer is not None:   # a rewind may go back to where the run resumed
-                    tick = self.resumed.tick
-                    self.checkpointer.taken[tick] = Taken(tick, None, data, self.recorder.marks())
+                    self.checkpointer.add(Taken(self.resumed.tick, None, data, self.recorder.marks()))
         except BaseException:
             self.master.close("the run failed")
             raise

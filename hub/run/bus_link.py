@@ -4,6 +4,7 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
+from hub.bus import wire
 from hub.bus.commands import Commands
 from hub.bus.dataplane import DataPlane
 from hub.bus.lockstep import Lockstep
@@ -28,7 +29,7 @@ class BusLink:
     """
 
     def __init__(self, plant, recorder, slaves: list, bus: Bus | None = None, commands: Commands | None = None,
-                 log=None, looks=(), figures=lambda: [], logs: Path | None = None, faults=None):
+                 log=None, looks=(), figures=lambda: [], logs: Path | None = None, faults=None, timeline=None):
         scenario = plant.scenario
         self.plant = plant
         self.recorder = recorder
@@ -41,6 +42,11 @@ class BusLink:
         self.looks, self.figures = looks, figures
         self.faults = faults   # () → the instructor's board (hub/run/faults.py FaultBook.board), or None
         self.logs = logs
+        # () → the run's Checkpointer (the checkpoints a rewind may go back to: hub/run/rewind.py), or None
+        self.timeline = timeline or (lambda: None)
+        self._timeline_version = None
+        self._timeline_pub = None
+        self._timeline_bytes = b""
         self._closed = False
 
     def start(self) -> Commands | None:
@@ -62,8 +68,23 @@ class BusLink:
             live.listen(self.bus, run)
         self.lockstep = Lockstep(self.bus, run, self.slaves, lease=settings.lease, on_loss=settings.on_loss,
                                  rate=plant.world.rate, log=self._notice, warn=self.log, logs=self.logs)
+        self._timeline_pub = self.bus.publisher(wire.control_key(run, "checkpoints"), wire.MSGPACK)
+        self._send_timeline(plant.world.tick)
+        self.bus.answer(wire.control_key(run, "checkpoints"), lambda: self._timeline_bytes, wire.MSGPACK)
         self.lockstep.start(plant.world.tick)
         return live
+
+    def _send_timeline(self, tick: int) -> None:
+        """The checkpoints a rewind may go back to, when they changed (schemas/wire.md `checkpoints`)."""
+        checkpoints = self.timeline()
+        version = None if checkpoints is None else checkpoints.version
+        if version == self._timeline_version and self._timeline_bytes:
+            return
+        self._timeline_version = version
+        rate = self.plant.world.rate
+        self._timeline_bytes = wire.pack({"tick": tick, "time": tick / rate, "rate": rate,
+                                          "checkpoints": [] if checkpoints is None else sorted(checkpoints.taken)})
+        self._timeline_pub.put(self._timeline_bytes)
 
     def rebind(self, plant, looks, faults) -> None:
         """Serve `plant`, built again by a rewind (hub/run/rewind.py), with its contributed `looks`
@@ -87,12 +108,14 @@ class BusLink:
     def observe(self, tick: int, signals, events) -> None:
         self.dataplane.publish(tick, signals)
         self.view.observe(tick, signals, events)
+        self._send_timeline(tick)
         self.lockstep.poll()
 
     def idle(self) -> None:
         """While the run is held (an operator's pause): participants' news taken in, views kept fresh."""
         self.lockstep.poll()
         self.view.idle(self.plant.world.tick)
+        self._send_timeline(self.plant.world.tick)
 
     def close(self, reason: str = "closed") -> None:
         """Tell participants the run is over, stop the processes it launched, close a bus it opened."""
@@ -101,6 +124,8 @@ class BusLink:
         self._closed = True
         try:
             try:
+                if self._timeline_pub is not None:   # a checkpoint at the last point, taken after this link observed it
+                    self._send_timeline(self.plant.world.tick)
                 if self.view is not None:   # the final figures (an exercise's score) before the state says stopped
                     self.view.close(reason)
                 if self.dataplane is not None:   # the last values go out before the run's state says stopped

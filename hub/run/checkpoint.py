@@ -209,7 +209,12 @@ class Checkpointer:
         self.log = log
         self.written: list[Path] = []
         self.taken: dict[int, Taken] = {}
+        self.version = 0   # changes whenever `taken` does (the bus's timeline of checkpoints is sent again)
         self.requested = False
+
+    def add(self, taken: Taken) -> None:
+        self.taken[taken.tick] = taken
+        self.version += 1
 
     def at_or_before(self, tick: int) -> Taken | None:
         """The latest checkpoint of the run's line at or before `tick`, or None."""
@@ -220,6 +225,7 @@ class Checkpointer:
         """Forget the checkpoints after `tick` (a rewind's abandoned branch); their files go to
         `folder/branchN/`. Returns where they went."""
         moved = []
+        self.version += 1
         for t in sorted(t for t in self.taken if t > tick):
             taken = self.taken.pop(t)
             if taken.path is not None and taken.path.exists():
@@ -247,7 +253,7 @@ class Checkpointer:
             self.written.append(path)
             if self.log is not None:
                 self.log(f"checkpoint at t = {tick / self.run.scenario.run.physics_rate:g} s: {path}")
-        self.taken[tick] = Taken(tick, path, None if saved else data, self.run.recorder.marks())
+        self.add(Taken(tick, path, None if saved else data, self.run.recorder.marks()))
 
     def close(self, reason: str) -> None:
         """Nothing to release: each checkpoint is complete once written."""
