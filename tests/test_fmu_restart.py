@@ -84,3 +84,23 @@ def test_restart_goes_with_a_child_process():
     with pytest.raises(ScenarioError, match=r"on_fault: restart goes with runs: child \(an FMU in a worker process "
                                             r"the hub can start again\), not runs: hub"):
         load_scenario(BELT_FMU, {"objects.drive.on_fault": "restart"})
+
+
+def test_a_step_that_fails_again_after_a_restart_stops_the_run_naming_both(tmp_path):
+    """The test-only `faulty` FMU's step at `hang_at` never returns, whatever worker steps it: the
+    restart does not help, and the run stops saying so."""
+    faulty = build(tmp_path / "faulty", models_dir=ROOT / "tests" / "fmu_models")
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(f"""planthub: 1
+run: {{duration: 2.0, physics_rate: 100, communication_step: 0.1}}
+objects:
+  counter: {{module: fmu, file: {faulty / 'faulty-fmi2.fmu'}, parameters: {{hang_at: 4}}, step_timeout: 0.5,
+             runs: child, on_fault: restart}}
+record: [counter.logic.steps]
+""")
+    with Run(load_scenario(scene), out=tmp_path / "out") as run, \
+            pytest.raises(SimulationError, match=r"^FMU instance 'counter' \(faulty-fmi2.fmu\) at t = 0.3 s: its step "
+                                                 r"did not return within 0.5 s .* \(restarted once at this step: FMU "
+                                                 r"instance 'counter' \(faulty-fmi2.fmu\) at t = 0.3 s: its step did "
+                                                 r"not return within 0.5 s"):
+        run.run()
