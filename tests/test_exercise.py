@@ -83,9 +83,9 @@ def test_planthub_test_judges_each_goal_and_the_score(write_scenario, tmp_path, 
     assert (properties["score"], properties["passed"]) == ("80", "true")
 
 
-def plant(times, jams=(), end=60.0, misrouted=()):
+def plant(times, jams=(), end=60.0, misrouted=(), rejected=()):
     return SimpleNamespace(delivery_times=tuple(times), jams=tuple(jams), end=end, delivered=len(times),
-                           misrouted=tuple(misrouted), per_minute=60.0 * len(times) / end)
+                           misrouted=tuple(misrouted), rejected=rejected, per_minute=60.0 * len(times) / end)
 
 
 def test_recovery_is_the_longest_stretch_without_a_delivery_after_the_fault():
@@ -108,6 +108,17 @@ def test_jam_and_misroute_goals_say_what_they_measured():
     wrong = SimpleNamespace(bottle="M7", destination="C", sink="sink_F")
     verdict = judge(Goal("misrouted", 0, 1, "m"), plant([1.0], misrouted=[wrong]), [])
     assert (verdict.met, verdict.message) == (False, "1 misrouted: M7 (for C) at sink_F")
+
+
+def test_the_reject_goal_counts_what_reject_sinks_took_and_needs_one():
+    out = [SimpleNamespace(bottle=f"M{i}", destination="A", sink="reject", time=float(i)) for i in range(1, 8)]
+    verdict = judge(Goal("rejected", 1, 1, "r"), plant([1.0], rejected=tuple(out)), [])
+    assert (verdict.met, verdict.message) == (False, "7 rejected: M1 (for A); M2 (for A); M3 (for A); M4 (for A); "
+                                                     "M5 (for A)")
+    assert judge(Goal("rejected", 1, 1, "r"), plant([1.0], rejected=tuple(out[:1])), []).met
+    assert Goal("rejected", 0, 1, "").describe() == "no bottle rejected"
+    verdict = judge(Goal("rejected", 0, 1, "r"), plant([1.0], rejected=None), [])
+    assert (verdict.met, verdict.message) == (False, "not judged: no sink takes rejects (`rejects: true`)")
 
 
 def test_an_interrupted_run_judges_only_the_goals_the_rest_of_it_could_not_change():

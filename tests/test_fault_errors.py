@@ -55,7 +55,7 @@ def test_every_bad_fault_and_goal_is_named_at_its_line(write_scenario):
             - {score: 3}
         """)
     assert problems(path) == [
-        f"{path}:33: exercise.goals[4].score: unknown key 'score' (known: delivered, longest_jam, misrouted, name, points, recover_within, throughput)",
+        f"{path}:33: exercise.goals[4].score: unknown key 'score' (known: delivered, longest_jam, misrouted, name, points, recover_within, rejected, throughput)",
         f'{path}:23: faults[14].for: -1 is less than or equal to the minimum of 0',
         f"{path}:23: faults[14].kind: 'melt' is not one of ['sensor_stuck', 'belt_failure', 'part_stuck', 'reader_fault', 'logic_dead', 'bottle_tipped']",
         f'{path}:24: faults[15].speed: 1.5 is greater than or equal to the maximum of 1',
@@ -74,8 +74,8 @@ def test_every_bad_fault_and_goal_is_named_at_its_line(write_scenario):
         f"{path}:21: faults[12].until: 1 s is not after the fault's start at 2 s",
         f"{path}:22: faults[13].name: two faults are named 'x' (the other at line 16): name them apart",
         f"{path}:25: faults[16].target: object 'sw' has no component that is state logic (a `logic` component: an FMU or a participant), which logic_dead needs",
-        f'{path}:29: exercise.goals[0]: give exactly one goal of delivered, misrouted, longest_jam, recover_within, throughput, not delivered and misrouted',
-        f'{path}:30: exercise.goals[1]: give exactly one goal of delivered, misrouted, longest_jam, recover_within, throughput',
+        f'{path}:29: exercise.goals[0]: give exactly one goal of delivered, misrouted, rejected, longest_jam, recover_within, throughput, not delivered and misrouted',
+        f'{path}:30: exercise.goals[1]: give exactly one goal of delivered, misrouted, rejected, longest_jam, recover_within, throughput',
         f"{path}:32: exercise.goals[3]: two goals are named 'same': name them apart",
     ]
 

@@ -5,6 +5,7 @@
       goals:
         - {delivered: 40}              # at least 40 bottles delivered
         - {misrouted: 0, points: 2}    # none misrouted; counts twice
+        - {rejected: 1}                # at most 1 bottle taken out at a reject sink
         - {longest_jam: 5}             # no jam longer than 5 s (0: none at all)
         - {recover_within: 20}         # after each fault's start, never 20 s without a delivery
         - {throughput: 10}             # at least 10 deliveries a minute over the run
@@ -15,7 +16,7 @@ the points of the goals met over all points, in %; the exercise passes at `pass`
 `planthub run` prints the goals and the score and writes them to summary.json (`exercise`);
 `planthub test` judges each goal as a test case beside the expectations (JUnit, one case per
 goal, and one for the score). Goals are judged on the plant summary (modules/plant/summary.py:
-deliveries, misrouted bottles, jams) and on the times the faults started (hub/run/faults.py), so
+deliveries, misrouted and rejected bottles, jams) and on the times the faults started (hub/run/faults.py), so
 a plant (sources, sinks) is needed.
 
 Recovery from a fault: the plant's output is measured by its deliveries, so the time it takes to
@@ -29,7 +30,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-GOALS = ("delivered", "misrouted", "longest_jam", "recover_within", "throughput")
+GOALS = ("delivered", "misrouted", "rejected", "longest_jam", "recover_within", "throughput")
 NO_PLANT = "an exercise's goals are judged on a plant, a scenario with a source or a sink; this one has neither"
 
 
@@ -47,11 +48,12 @@ class Goal:
         """Whether the verdict stands if the run ends here (an interrupted run): a goal failed
         that the rest of the run could only make worse (misroutes, a jam's length), or one met that
         it could not undo (bottles delivered). The rest waits for the run's end."""
-        return (not met and self.key in ("misrouted", "longest_jam")) or (met and self.key == "delivered")
+        return (not met and self.key in ("misrouted", "rejected", "longest_jam")) or (met and self.key == "delivered")
 
     def describe(self) -> str:
         return {"delivered": f"at least {self.limit:g} bottles delivered",
                 "misrouted": "no bottle misrouted" if self.limit == 0 else f"at most {self.limit:g} misrouted",
+                "rejected": "no bottle rejected" if self.limit == 0 else f"at most {self.limit:g} rejected",
                 "longest_jam": "no jam" if self.limit == 0 else f"no jam longer than {self.limit:g} s",
                 "recover_within": f"never {self.limit:g} s without a delivery after a fault",
                 "throughput": f"at least {self.limit:g} deliveries a minute"}[self.key]
@@ -119,6 +121,12 @@ def judge(goal: Goal, plant, faults: list[tuple[str, float]]) -> Verdict:
         wrong = plant.misrouted
         named = "; ".join(f"{m.bottle} (for {m.destination}) at {m.sink}" for m in wrong[:5])
         return Verdict(goal, len(wrong) <= goal.limit, f"{len(wrong)} misrouted" + (f": {named}" if named else ""))
+    if goal.key == "rejected":
+        if plant.rejected is None:
+            return Verdict(goal, False, "not judged: no sink takes rejects (`rejects: true`)")
+        out = plant.rejected
+        named = "; ".join(f"{r.bottle} (for {r.destination})" for r in out[:5])
+        return Verdict(goal, len(out) <= goal.limit, f"{len(out)} rejected" + (f": {named}" if named else ""))
     if goal.key == "longest_jam":
         if not plant.jams:
             return Verdict(goal, True, "no jam")
