@@ -9,7 +9,7 @@ from hub.core.observer import Observer, StopCondition
 from hub.core.registry import load_entry
 from hub.logic.watchdog import WATCHDOG
 from hub.run.bus_link import BusLink
-from hub.run.checkpoint import Checkpointer, Taken
+from hub.run.checkpoint import Checkpointer, Taken, by_kind
 from hub.run.checkpoint import apply as put_back
 from hub.run.ending import ending
 from hub.run.hold import Hold
@@ -225,8 +225,8 @@ class Run:
             commands.rebind(plant)
         before = self.contributed
         self.contributed = self._contribute(plant, faulted)
-        made = _by_kind(self.contributed)
-        for key, part in _by_kind(before).items():
+        made = by_kind(self.contributed)
+        for key, part in by_kind(before).items():
             replaced[id(part)] = made.get(key)
         self.master.rebind(plant, replaced)
         if self.link is not None:
@@ -310,19 +310,6 @@ class Run:
     def __exit__(self, *exc):
         self.failure = exc[1]
         self.close("the run failed" if exc[0] is not None else "closed")
-
-
-def _by_kind(parts: list) -> dict[str, object]:
-    """Parts by class and occurrence: a part made for a plant built again finds its counterpart."""
-    out = {}
-    for part in parts:
-        name = f"{type(part).__module__}.{type(part).__qualname__}"
-        key, n = name, 1
-        while key in out:
-            n += 1
-            key = f"{name}#{n}"
-        out[key] = part
-    return out
 
 
 def _contributions(scenario: Scenario, plant) -> list:

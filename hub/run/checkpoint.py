@@ -69,13 +69,11 @@ def fingerprint(scenario) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def _observers(run) -> dict[str, object]:
-    """The run's observers and stop conditions that keep state, by class and occurrence."""
-    seen, out = set(), {}
-    for part in (*run.master.observers, *run.master.stops, *run.contributed):
-        if id(part) in seen or not state.is_stateful(part):
-            continue
-        seen.add(id(part))
+def by_kind(parts) -> dict[str, object]:
+    """Parts by class and occurrence (`module.Class`, `module.Class#2`, …): a part of a run built
+    again from the same scenario finds its counterpart under the same key."""
+    out = {}
+    for part in parts:
         name = f"{type(part).__module__}.{type(part).__qualname__}"
         key, n = name, 1
         while key in out:
@@ -83,6 +81,12 @@ def _observers(run) -> dict[str, object]:
             key = f"{name}#{n}"
         out[key] = part
     return out
+
+
+def _observers(run) -> dict[str, object]:
+    """The run's observers and stop conditions that keep state, by class and occurrence."""
+    parts = {id(p): p for p in (*run.master.observers, *run.master.stops, *run.contributed) if state.is_stateful(p)}
+    return by_kind(parts.values())
 
 
 def capture(run, in_point: bool = False) -> bytes:
