@@ -124,3 +124,35 @@ def test_the_public_figures_hold_no_fault_and_judge_recovery_only_when_the_run_e
     assert [g["met"] for name, g in goals.items() if name != "recovered"] == [True]   # the others live
     final = {g["name"]: g for g in ended["sections"]["exercise"]["goals"]}
     assert final["recovered"]["met"] is True and final["recovered"]["measured"].startswith("slow: ")
+
+
+def test_a_run_resumed_from_a_checkpoint_taken_during_a_live_fault_keeps_the_fault(tmp_path, monkeypatch):
+    """The plant runs with no fault of its own; an instructor's fault (the belt at a fifth of its
+    speed, 33 → 108) is in effect when the checkpoint is taken (60): the run resumed from it keeps
+    the fault and ends it at the same tick, and goes on bit for bit. Bottles as multibodies, as
+    tests/test_checkpoint.py resumes them bit for bit."""
+    from hub.physics.world import PhysicsWorld
+    from hub.run import checkpoint
+
+    monkeypatch.setattr(PhysicsWorld, "MAXIMAL", False)
+    record = {"record": ["bottle.body.position", "belt.drive.running", "belt.drive.speed"]}
+    with Bus(BusSettings()) as bus, hub(STOP, tmp_path / "whole", record, bus=bus) as master, \
+            Viewer(RUN, bus.endpoints) as instructor:
+        master.run(until_tick=30)
+        ident = instructor.command("fault", "belt.drive", SLOW, by="instructor", wait=None, instructor=True)
+        assert wait_until(master.commands.pending, 5.0)
+        master.run(until_tick=60)
+        assert instructor.answer(ident, 5.0)["ok"]
+        data = checkpoint.capture(master)
+        master.run()
+    with Bus(BusSettings()) as bus, hub(STOP, tmp_path / "resumed", record, bus=bus,
+                                        resume=(data, "checkpoint")) as resumed:
+        resumed.run()
+        faults = [s for s in resumed.summary().sections if s.key == "faults"]
+    assert [(f.name, f.start, f.end) for f in faults[0].started] == [("slow", 33, 108)]
+
+    def after(name):
+        return [r for r in rows(tmp_path / name) if int(r.get("tick") or round(float(r["time"]) * 150)) > 60]
+
+    assert after("resumed/recording.csv") == after("whole/recording.csv")
+    assert after("resumed/events.csv") == after("whole/events.csv")

@@ -9,7 +9,7 @@ from hub.core.observer import Observer, StopCondition
 from hub.core.registry import load_entry
 from hub.logic.watchdog import WATCHDOG
 from hub.run.bus_link import BusLink
-from hub.run.checkpoint import Checkpointer, Taken, by_kind
+from hub.run.checkpoint import Checkpointer, Taken, by_kind, held_parts
 from hub.run.checkpoint import apply as put_back
 from hub.run.ending import ending
 from hub.run.hold import Hold
@@ -78,7 +78,7 @@ class Run:
                 stops = [self.interruption, *stops]
             # Imported here: replaying needs the bus package's command parser, not a bus.
             from hub.bus.commands import Commands, load_commands
-            from hub.run.faults import Board, FaultBook, FaultSchedule
+            from hub.run.faults import FAULTS_PART, Board, FaultBook, FaultSchedule
             # Faults begin and end as commands (hub/run/faults.py): the scenario's schedule gives
             # them to a Commands of their own; a replay's recorded commands hold them instead.
             self.faults = FaultBook(plant)
@@ -101,7 +101,11 @@ class Run:
                 manipulators = [schedule, scheduled]
             self.schedule = schedule
             self._live = live
-            self.contributed = self._contribute(plant, scenario.faults or any(c.op == "fault" for _, c in recorded or ()))
+            # With the faults' parts if there may be faults to save: scheduled, recorded, or in
+            # the checkpoint to resume from (a live fault's).
+            faulted = bool(scenario.faults) or any(c.op == "fault" for _, c in recorded or ()) or (
+                resume is not None and FAULTS_PART in held_parts(*resume))
+            self.contributed = self._contribute(plant, faulted)
             self.bodies = None   # the body recording, for playback (run.record_bodies)
             if self.out is not None and scenario.run.record_bodies:
                 from hub.view.bodies_file import BodyRecorder  # pyarrow is loaded only for it

@@ -130,6 +130,13 @@ def header(data: bytes, where: str) -> tuple[Header, bytes]:
     return head, payload
 
 
+def held_parts(data: bytes, where: str) -> set[str]:
+    """The keys (`by_kind`) of the run's parts whose state a checkpoint holds: a run about to put it
+    back makes the parts it would not have made otherwise (the faults' after a live fault)."""
+    _, payload = header(data, where)
+    return set(state.loads(payload, where)["observers"])
+
+
 def apply(run, data: bytes, where: str) -> Header:
     """Put a checkpoint into `run`, a run of the same scenario built and not yet started: it then
     continues from the checkpoint's communication point."""

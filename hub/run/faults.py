@@ -471,3 +471,8 @@ class FaultsState:
             self.schedule.counts[:] = counts
             self.schedule.ends.clear()
             self.schedule.ends.update(ends)
+
+
+#: The faults' part's key in a checkpoint (hub/run/checkpoint.py `by_kind`): a checkpoint that
+#: holds it was taken with faults in effect or begun.
+FAULTS_PART = f"{FaultsState.__module__}.{FaultsState.__qualname__}"

@@ -23,13 +23,9 @@ What the run folder keeps of it:
 """
 from __future__ import annotations
 
-from hub.core import state
 from hub.core.errors import CheckpointError, SimulationError
 from hub.run import checkpoint
 from hub.run.plant import Plant
-
-#: the key of the faults' part in a checkpoint (hub/run/checkpoint.py `_observers`)
-FAULTS_PART = "hub.run.faults.FaultsState"
 
 
 class Rewinder:
@@ -82,9 +78,9 @@ class Rewinder:
         run = self.run
         scenario, rate = run.scenario, run.scenario.run.physics_rate
         data = taken.bytes()
+        from hub.run.faults import FAULTS_PART
         try:
-            _, payload = checkpoint.header(data, taken.where)
-            faulted = FAULTS_PART in state.loads(payload, taken.where)["observers"]
+            faulted = FAULTS_PART in checkpoint.held_parts(data, taken.where)
         except (CheckpointError, KeyError, TypeError) as exc:
             raise SimulationError(f"the rewind at tick {tick} to tick {taken.tick}: {exc}") from None
         plant = Plant(scenario, every_source=run.every_source)
