@@ -11,7 +11,6 @@ from hub.bus.lockstep import Lockstep
 from hub.bus.session import Bus, local_endpoint
 from hub.bus.settings import BusSettings, exposure
 from hub.bus.wire import check_run_name
-from hub.core.observer import BodyLook
 from hub.view.broadcast import Broadcast
 
 _log = logging.getLogger(__name__)
@@ -93,13 +92,7 @@ class BusLink:
         if self.dataplane is not None:
             self.dataplane.rebind(plant)
         if self.view is not None:
-            # The view's feed reads the world and the looks at each point; its scene (the plant's
-            # structure, the same for a plant built again) and its subscribers stay. Its clock
-            # starts again: the bodies at the next point, the real-time factor from there.
-            view = self.view
-            view.plant, view.world, view.faults = plant, plant.world, faults
-            view.looks = [look for look in looks if isinstance(look, BodyLook)]
-            view._due, view._started = 0, None
+            self.view.rebind(plant, looks=looks, faults=faults)
 
     def _notice(self, text: str) -> None:
         self.recorder.notice(self.plant.world.tick, text)

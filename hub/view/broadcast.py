@@ -75,6 +75,16 @@ class Broadcast:
         bus.subscribe(wire.control_key(run, "viewer", "*", "rate"), lambda m: inbox.put(("rate", m)))
         bus.watch_tokens(wire.control_key(run, "viewer", "*"), lambda m: inbox.put(("viewer", m)))
 
+    def rebind(self, plant, *, looks=(), faults=None) -> None:
+        """Feed `plant`, built again by a rewind (hub/run/rewind.py), with its contributed `looks`
+        and the instructor's board `faults`. The scene (the plant's structure, the same for a plant
+        built again), the publishers and the viewers with their rate requests stay; the clock starts
+        again: the bodies at the next point, the real-time factor from there, the board at once."""
+        self.plant, self.world, self.faults = plant, plant.world, faults
+        self.looks = [look for look in looks if isinstance(look, BodyLook)]
+        self._due, self._started = 0, None
+        self._board_version = None
+
     def observe(self, tick: int, signals, events) -> None:
         now = time.perf_counter()
         if self._started is None:
@@ -105,7 +115,7 @@ class Broadcast:
         if self._figures_watched and now >= self._next_figures:
             self._next_figures = now + FIGURES_EVERY
             self._figure_pub.put(wire.pack(self.figures_message(tick, now)))
-        if self._board_watched:
+        if self._board_watched and self.faults is not None:
             self._send_board(tick, now)
 
     def idle(self, tick: int) -> None:
