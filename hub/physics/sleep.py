@@ -27,9 +27,9 @@ class Sleep:
         MovingParts, whose boxes would wake them at the next tick)."""
         b, rest = self.bodies, self.rest
         rows = b.awake_rows()
-        if len(rows) == 0:
-            return
         field = b.under
+        if len(rows) == 0 or field is None:   # None: a body was taken out since this tick's read (the
+            return                            # watch's `remove`): the fields under the rest are looked up next tick
         gripped = np.zeros(len(rest.allowed), bool)
         if held:
             gripped[held] = True

@@ -123,6 +123,16 @@ def test_remove_parks_the_thrown_bottle_logs_it_and_the_run_goes_on(caplog):
                for r in caplog.records)
 
 
+def test_a_body_taken_out_at_a_tick_the_rest_rule_looks_leaves_the_rest_to_the_next_look():
+    """The rest rule reads the fields under the bodies of the tick's read; the body the watch took
+    out since is skipped at that look, not a crash (a TypeError before)."""
+    world, result = run("watch_fall_on_a_look")
+    off = world.labels.index("off")
+    assert [(tick, body) for tick, body, _ in world.watch.removed] == [(51, off)]
+    assert 51 % world.rest.every == 0 and result.ticks == 150
+    assert world.positions[world.labels.index("resting")][0] > 0.9   # the other bottle rode on
+
+
 def test_a_bottle_placed_inside_a_rail_is_reported_at_load():
     with pytest.raises(SimulationError) as caught:
         run("watch_in_rail")
