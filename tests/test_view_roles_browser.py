@@ -10,39 +10,15 @@ exercise's goals show live and its score at the end.
 """
 from __future__ import annotations
 
-import contextlib
 import json
-import os
 
 import pytest
 
 from .helpers import ROOT
-from .view_support import BUNDLE, CHROMIUM, FLAGS, command_rows, hub, view
+from .view_support import command_rows, hub, two_pages, view
 
 SCENARIO = ROOT / "scenarios" / "switch.yaml"
 EXERCISE = {"task": "Deliver both bottles, each to its lane.", "goals": [{"delivered": 2, "name": "both delivered"}]}
-
-
-@contextlib.contextmanager
-def two_pages(*urls):
-    """One chromium, a tab per url once its socket is open; yields the tabs and the page errors."""
-    from playwright.sync_api import sync_playwright
-
-    assert BUNDLE.is_file(), f"no {BUNDLE}: build the front-end with `make view-assets`"
-    assert os.access(CHROMIUM, os.X_OK), f"no {CHROMIUM}: `make chromium` installs it"
-    with sync_playwright() as playwright:
-        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True, timeout=60_000)
-        try:
-            tabs, errors = [], []
-            for url in urls:
-                tab = browser.new_page(viewport={"width": 1100, "height": 700})
-                tab.on("pageerror", lambda exc: errors.append(str(exc)))
-                tab.goto(url, timeout=60_000)
-                tab.wait_for_function("window.planthub && window.planthub.connected", timeout=60_000)
-                tabs.append(tab)
-            yield tabs, errors
-        finally:
-            browser.close()
 
 
 @pytest.fixture(scope="module")

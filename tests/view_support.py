@@ -120,6 +120,29 @@ def browser_page(url: str, viewport=(960, 640)):
             browser.close()
 
 
+@contextlib.contextmanager
+def two_pages(*urls):
+    """One chromium, a tab per url once its socket is open; yields the tabs and the page errors
+    (the browser is closed whatever happens)."""
+    from playwright.sync_api import sync_playwright
+
+    assert BUNDLE.is_file(), f"no {BUNDLE}: build the front-end with `make view-assets`"
+    assert os.access(CHROMIUM, os.X_OK), f"no {CHROMIUM}: `make chromium` installs it"
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True, timeout=60_000)
+        try:
+            tabs, errors = [], []
+            for url in urls:
+                tab = browser.new_page(viewport={"width": 1100, "height": 700})
+                tab.on("pageerror", lambda exc: errors.append(str(exc)))
+                tab.goto(url, timeout=60_000)
+                tab.wait_for_function("window.planthub && window.planthub.connected", timeout=60_000)
+                tabs.append(tab)
+            yield tabs, errors
+        finally:
+            browser.close()
+
+
 def talk(url, conversation, **headers):
     """Run `conversation(ws)` against the view's WebSocket (aiohttp's client); its result."""
     import aiohttp

@@ -5,13 +5,16 @@ view → browser, text frames, JSON objects with `type`: `hello` first (`run`, `
 and the `reason` when it is false; `mode: "playback"` and the recording's span for a run folder),
 `scene` (the scene document, schemas/scene.schema.json), `state`, `figures`, `events` (`rows`),
 `result` (a command's answer, with the `op`, `slot` and `ref` it was sent with), `slots` (live
-values of the belts' velocities), `hub` (`alive`), `error`, and for playback `playback` and
+values of the belts' velocities), `hub` (`alive`), `checkpoints` (the ticks a rewind may go back
+to, the hub's `checkpoints` message as it came: `tick`, `time`, `rate`, `checkpoints`;
+schemas/wire.schema.json `checkpoints`), `error`, and for playback `playback` and
 `recording`; to an instructor's page only, `faults` (the board, schemas/scene.schema.json
 `faults_message`) — hello's `role` says which page it is (`instructor`, `trainee`, with the
 `role_reason` a trainee's is one). Binary frames: the bodies message exactly as it came from the bus
 (schemas/scene.schema.json `bodies_message`). browser → view: `{"type": "command", "op", "slot",
 "value", "ref"}` (`fault`: slot `object.component`, value a map with the fault's `name`, `kind`, its
-parameters and an optional `for` in s; `repair`: value `{"name"}`), `{"type": "rate", "period"}`, and for playback `{"type": "playback", "op":
+parameters and an optional `for` in s; `repair`: value `{"name"}`; `rewind`: value the tick to go
+back to), `{"type": "rate", "period"}`, and for playback `{"type": "playback", "op":
 play|pause|speed|seek, "value"}`.
 
 A browser's frame that is not one of these gets an error frame back naming what is wrong; the
@@ -31,7 +34,7 @@ from hub.core.errors import PlanthubError
 from hub.core.numbers import is_number
 
 #: the operator commands a browser may send; those that name a slot, and those that carry a value
-OPS = ("set", "force", "release", "stop", "pause", "resume", "step", "pace", "fault", "repair")
+OPS = ("set", "force", "release", "stop", "pause", "resume", "step", "pace", "rewind", "fault", "repair")
 FAULT_OPS = ("fault", "repair")   # an instructor's only (hub/view/server.py refuses them from a trainee's page)
 SLOT_OPS = ("set", "force", "release")
 #: the largest text frame a browser may send, bytes (a command is under 200)
@@ -122,6 +125,9 @@ def _command(message: dict) -> CommandRequest:
     elif op == "pace":
         if not is_number(value) or not value > 0:
             raise FrameError(f"pace takes a positive factor of real time (1.0, 2.0), got {_shown(value)}")
+    elif op == "rewind":
+        if not _integer(value) or value < 0:
+            raise FrameError(f"rewind takes the tick to go back to (a whole number, 0 or more), got {_shown(value)}")
     elif op in ("release", "stop", "pause", "resume") and value is not None:
         raise FrameError(f"{op} takes no value, got {_shown(value)}")
     return CommandRequest(op, slot, value, ref)

@@ -57,6 +57,7 @@ class Relay:
             bus.subscribe_payloads(key("figures"), lambda p: bridge.latest("figures", p))
             bus.subscribe_payloads(key("events"), lambda p: bridge.put("events", p))
             bus.subscribe_payloads(key("state"), lambda p: bridge.put("state", p))
+            bus.subscribe_payloads(key("checkpoints"), lambda p: bridge.latest("checkpoints", p))
             bus.subscribe_payloads(key("command", "result"), lambda p: bridge.put("result", p))
             bus.subscribe(self.speeds, lambda m: bridge.put("slot", m))
             bus.watch_tokens(wire.hub_token(self.run), lambda m: bridge.put("hub", m.alive))
@@ -80,6 +81,12 @@ class Relay:
         """The scene document, or None when the hub did not answer within `timeout` s (blocks)."""
         message = self.bus.ask(self._key("scene"), timeout)
         return None if message is None else self._scene(message.payload)
+
+    def ask_checkpoints(self, timeout: float) -> bytes | None:
+        """The checkpoints a rewind may go back to (schemas/wire.md `checkpoints`) as the hub answers
+        them now, or None when it did not within `timeout` s (blocks)."""
+        message = self.bus.ask(self._key("checkpoints"), timeout)
+        return None if message is None else message.payload
 
     def command(self, op: str, slot: str, value, ident: str, instructor: bool = False) -> None:
         """An operator command, sent by this view (blocks while Zenoh is congested: call it off the loop);

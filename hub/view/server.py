@@ -1,6 +1,7 @@
 """The `planthub view` process: the relay (bus side) and the web side on one asyncio loop, until SIGINT or SIGTERM.
 
-    hub ── scene (query), bodies, events, figures, state, results, belt speeds ──► relay ─► View ─► browsers
+    hub ── scene (query), bodies, events, figures, state, checkpoints (also a query), results, belt speeds
+                                                                                     ──► relay ─► View ─► browsers
     hub ◄── command, rate requests ──────────────────────────────────────────────── relay ◄─ View ◄─ browsers
     hub ── @instructor: faults board, fault events, results ──► relay ─► View ─► an instructor's browsers
     hub ◄── @instructor/command (fault, repair, any other) ──── relay ◄─ View ◄─ an instructor's browsers
@@ -63,6 +64,8 @@ class View:
         self._hello()
         self.scene: str | None = None          # the scene frame, once the hub answered
         self.state = self.figures = None      # the last frames of each, for a browser that comes late
+        self.checkpoints = None               # the last checkpoints frame: the panel's timeline
+        self._checkpoints_heard = 0           # checkpoints messages the hub published (a query's answer may be older)
         self.stopped: str | None = None       # why the run stopped, once its state said so
         self.bodies: bytes | None = None
         self.events: deque = deque(maxlen=KEPT_EVENTS)
@@ -118,6 +121,36 @@ class View:
         self.stopped = state.get("reason", "") if state.get("state") == "stopped" else None
         self.state = self._broadcast("state", state)
 
+    def _on_checkpoints(self, payload: bytes) -> None:
+        self._checkpoints_heard += 1
+        self._take_checkpoints(payload)
+
+    def _take_checkpoints(self, payload: bytes) -> None:
+        """The checkpoints a rewind may go back to (schemas/wire.md `checkpoints`), for the panel's timeline."""
+        message = self._map(payload, "checkpoints")
+        ticks, rate = message.get("checkpoints"), message.get("rate")
+        if not isinstance(ticks, list) or not all(isinstance(t, int) and not isinstance(t, bool) and t >= 0
+                                                  for t in ticks):
+            raise wire.WireError(f"checkpoints: expected an array of ticks, got {ticks!r:.80}")
+        if not isinstance(rate, (int, float)) or isinstance(rate, bool) or not rate > 0:
+            raise wire.WireError(f"checkpoints: expected a positive rate, got {rate!r:.80}")
+        self.checkpoints = self._broadcast("checkpoints", message)
+
+    async def _ask_checkpoints(self) -> None:
+        """A view that joins a run already going has missed its last checkpoints message: ask for it.
+        One the hub publishes meanwhile is newer than the answer, which is then dropped."""
+        heard = self._checkpoints_heard
+        try:
+            payload = await asyncio.to_thread(self.relay.ask_checkpoints, SCENE_ASK)
+        except PlanthubError as exc:
+            _log.warning("planthub view: %s", exc)
+            return
+        if payload is not None and heard == self._checkpoints_heard:
+            self.deliver("asked_checkpoints", payload)
+
+    def _on_asked_checkpoints(self, payload: bytes) -> None:
+        self._take_checkpoints(payload)
+
     def _on_events(self, payload: bytes, faults: bool = False) -> None:
         rows = wire.unpack(payload)
         if not isinstance(rows, list):
@@ -168,6 +201,7 @@ class View:
         self._put(self.relay.rate, self.relay.speeds, SPEEDS_PERIOD)
         if self.bodies_period is not None:
             self._put(self.relay.rate, wire.control_key(self.run, "bodies"), self.bodies_period)
+        self._spawn(self._ask_checkpoints())
         if self._hub_seen:   # it came back: maybe another run of the same name, with another scene
             _log.warning("planthub view: the hub of run %r is back", self.run)
             self._spawn(self._refetch())
@@ -207,7 +241,7 @@ class View:
         if self.scene is not None:
             browser.send(self.scene)
         browser.send(frames.frame("hub", alive=self.hub_alive))
-        for text in (self.state, self.figures, self.faults if self.role == INSTRUCTOR else None):
+        for text in (self.state, self.figures, self.checkpoints, self.faults if self.role == INSTRUCTOR else None):
             if text is not None:
                 browser.send(text)
         if self.events:

@@ -8,6 +8,7 @@ export function installHooks(bodiesNow) {
     connected: false,   // the WebSocket is open
     frames: 0,          // frames rendered (renderer.render calls)
     tick: -1,           // tick of the newest bodies message received; -1 before the first
+    time: null,         // its plant time, s
     bodies: () => bodiesNow(),   // {"<id>": [x, y, z]}: drawn, interpolated positions of the bodies in play
     events: [],         // every [tick, slot, detail] row seen, oldest first
     figures: null,      // the last figures map {tick, time, wall, rtf, sections}
@@ -17,6 +18,7 @@ export function installHooks(bodiesNow) {
     results: [],        // command results {id, ok, tick, error}, oldest first
     playback: null,     // a recorded run's playback: {time: plant s drawn, playing, speed}; null: a live run
     faults: null,       // the last faults board (an instructor's page only)
+    checkpoints: null,  // the last checkpoints message {tick, time, rate, checkpoints}: the panel's timeline
     exercise: null,     // the exercise as shown: {task, goals, score, …, ended}
     labels: () => [],   // the name tags shown now: [{object, kind}]
     lost: [],           // ids of followed bottles the camera let go of when they left

@@ -80,6 +80,7 @@ class App {
       events: () => this._events(m),
       result: () => this._result(m),
       faults: () => this._faults(m),
+      checkpoints: () => this._checkpoints(m),
       slots: () => this.plots.slots(m),
       playback: () => this._playbackState(m),
       recording: () => this.recorded.set(m),
@@ -191,7 +192,15 @@ class App {
     if (m.op === 'fault' || m.op === 'repair') {
       this.hooks.results.push({ ...m, ok: false });
       this.faults.result({ ...m, ok: false });
-    } else this.playbar.refused(m);
+    } else if (this.mode === 'playback') this.playbar.refused(m);
+    else if (m.op) this.panel.result({ ...m, ok: false });
+  }
+
+  /** The run's checkpoints: the panel's timeline, each one a rewind may go back to. */
+  _checkpoints(m) {
+    const { type, ...timeline } = m;
+    this.hooks.checkpoints = timeline;
+    this.panel.checkpoints(timeline);
   }
 
   _faults(m) {
@@ -223,6 +232,8 @@ class App {
     }
     this.hooks.tick = sample.tick;
     this.$('#clock').textContent = `t = ${formatNumber(sample.time)} s`;
+    this.hooks.time = sample.time;
+    this.panel.now(sample.time);
     this.playback.push(sample, performance.now() / 1000);
   }
 

@@ -4,6 +4,8 @@
 // Every button says what it sends in data-op / data-slot / data-value (JSON), which is also
 // what the one click handler reads — the markup is the contract.
 
+import { Timeline } from './timeline.js';
+
 const RESULTS_SHOWN = 4;
 
 /** The control rules: slot → label and buttons [text, op, value]. */
@@ -63,6 +65,7 @@ export class Panel {
     this.reasonBox = root.querySelector('#panel-reason');
     this._buildRunControls(root.querySelector('#run-controls'));
     this.objectsBox = root.querySelector('#object-controls');
+    this.timeline = new Timeline(root.querySelector('#timeline'));
     root.addEventListener('click', (e) => this._click(e));
     this.setControl(false, this.reason);
   }
@@ -131,6 +134,17 @@ export class Panel {
     for (const el of this.root.querySelectorAll('button, input')) el.disabled = !this.control;
     this.reasonBox.hidden = this.control;
     this.reasonBox.textContent = this.control ? '' : (this.reason || 'control is not allowed');
+    this.timeline.setControl(this.control);
+  }
+
+  /** The checkpoints a rewind may go back to (the hub's `checkpoints` message). */
+  checkpoints(m) {
+    this.timeline.update(m);
+  }
+
+  /** The plant time drawn (s), for the timeline's present. */
+  now(time) {
+    this.timeline.now(time);
   }
 
   _click(e) {
