@@ -74,7 +74,7 @@ def test_a_browser_gets_hello_then_the_scene_then_bodies_events_and_belt_speeds(
         scene = await greeting(ws)
         assert scene["format"] == "planthub-scene" and scene["run"] == RUN
         assert ["drive.run", "bool", "target"] in scene["objects"]["belt"]["slots"]
-        seen = {"bytes": [], "events": [], "slots": []}
+        seen = {"bytes": [], "events": [], "slots": [], "checkpoints": []}
         while not all(seen.values()):
             frame = await wait_for(ws, lambda f: True, what="frames")
             kind = "bytes" if isinstance(frame, bytes) else frame["type"]
@@ -90,6 +90,9 @@ def test_a_browser_gets_hello_then_the_scene_then_bodies_events_and_belt_speeds(
     assert {r[1] for f in seen["events"] for r in f["rows"]} <= {"source.store.released", "source.store.waiting",
                                                                   "sink.bin.taken"}
     assert set(seen["slots"][0]["values"]) == {"belt.drive.velocity"}
+    # The panel's timeline: this run takes no checkpoint, so a rewind has nothing to go back to.
+    timeline = seen["checkpoints"][0]
+    assert timeline["checkpoints"] == [] and timeline["rate"] == scene["physics_rate"], timeline
 
 
 def test_a_browser_command_reaches_the_hub_is_recorded_and_stops_the_belts_bottles(plant):
@@ -352,3 +355,18 @@ def test_a_malformed_host_or_origin_is_refused_not_a_server_error(plant):
                 return r.status, await r.text()
     status, text = asyncio.run(main())
     assert status == 403 and "malformed Host" in text, (status, text)
+
+
+def test_a_rewind_from_the_browser_is_answered_by_the_hub_with_its_reason(plant):
+    endpoint, run_dir, url, _ = plant
+
+    async def conversation(ws):
+        await greeting(ws)
+        await ws.send_str(json.dumps({"type": "command", "op": "rewind", "value": 10, "ref": "back"}))
+        return await wait_for(ws, lambda f: isinstance(f, dict) and f.get("ref") == "back", what="the answer")
+
+    answer = talk(url, conversation)
+    assert answer["type"] == "result" and answer["op"] == "rewind" and answer["ok"] is False, answer
+    assert answer["error"].startswith("rewind 10: no checkpoint at or before tick 10 (t = "), answer
+    assert answer["error"].endswith("this run has taken none yet (planthub run --checkpoint-at, --checkpoint-every, "
+                                    "or planthub send RUN checkpoint)"), answer
