@@ -106,7 +106,7 @@ def test_logic_on_a_module_without_one_and_bad_logic_options(fmus, write_scenari
         f"{path}:4: objects.belt.logic.fil: unknown key 'fil' (did you mean 'file'?)",
         f"{path}:5: objects.other.logic.file: {path.parent / 'nope.fmu'}: no such FMU file",
         f"{path}:6: objects.third.logic: expected `default` or a mapping of file, parameters, map, runs, "
-        f"step, on_bad_value, step_timeout, interface, solver, max_step, tolerance, got True",
+        f"step, on_bad_value, on_fault, step_timeout, interface, solver, max_step, tolerance, got True",
     ]
 
 

@@ -5,7 +5,7 @@ fault; the plant's belts, sensors and switches are named on hover and by tags; t
 kind of thing drawn; the camera following a bottle lets go of it when the bottle leaves the plant; the
 exercise's goals show live and its score at the end.
 
-    planthub run switch.yaml --realtime 0.25 ──┬── planthub view (instructor) ◄── chromium tab 1
+    planthub run switch.yaml --realtime 0.1 ───┬── planthub view (instructor) ◄── chromium tab 1
       (a ─ b ─[reader]─╮blade╭─ main_end)     └── planthub view --role trainee ◄── chromium tab 2
 """
 from __future__ import annotations
@@ -24,8 +24,10 @@ EXERCISE = {"task": "Deliver both bottles, each to its lane.", "goals": [{"deliv
 @pytest.fixture(scope="module")
 def pages(tmp_path_factory):
     folder = tmp_path_factory.mktemp("roles_browser")
-    with hub(folder, SCENARIO, "--set", "run.duration=9", "--set", f"exercise={json.dumps(EXERCISE)}",
-             realtime=0.25) as (started, endpoint, run_dir), \
+    # At a tenth of real time: A leaves the plant at about 4 s (40 s of wall time), after the
+    # tests before the camera's have done, however fast the machine; the run ends at 5 s (50 s).
+    with hub(folder, SCENARIO, "--set", "run.duration=5", "--set", f"exercise={json.dumps(EXERCISE)}",
+             realtime=0.1) as (started, endpoint, run_dir), \
             view(folder, "switch", endpoint, name="instructor") as (_, instructor), \
             view(folder, "switch", endpoint, "--role", "trainee", name="trainee") as (_, trainee), \
             two_pages(instructor, trainee) as ((teacher, pupil), errors):
