@@ -84,6 +84,7 @@ def test_an_enip_gateway_on_a_taken_port_does_not_start_naming_the_endpoint(tmp_
                                   "(another gateway or server holds the port?)")
 
 
+@pytest.mark.slow
 def test_a_logix_plc_scanning_every_100_ms_routes_the_bottling_plant(tmp_path):
     out, said, summary = bottling_via_gateway(tmp_path, "enip", DURATION, "--scan", "0.1")
     scans, decisions = int(said.split()[1]), int(said.split()[3])

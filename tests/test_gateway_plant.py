@@ -8,6 +8,8 @@ from .gateway_support import bottling_via_gateway
 from .helpers import run_scenario
 from .test_bottling_plant import LANES, SCENARIO, deliveries
 
+pytestmark = pytest.mark.slow   # each test routes the bottling plant through a gateway and a PLC process
+
 DURATION = 56.0   # s: by then every lane has had a bottle (tests/test_bottling_plant.py)
 
 

@@ -143,6 +143,7 @@ def test_a_second_s7_gateway_on_a_taken_port_is_refused_naming_the_endpoint(tmp_
     assert str(second.value).startswith(f"the S7 server could not listen at 127.0.0.1:{port}: Address already in use")
 
 
+@pytest.mark.slow
 def test_an_s7_plc_routes_the_bottling_plant_bit_for_bit_as_the_participant(tmp_path):
     reference = tmp_path / "participant"
     run_scenario(BOTTLING, reference, {"run.duration": DURATION, "objects.control.runs": "hub"})

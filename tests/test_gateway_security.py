@@ -196,6 +196,7 @@ def test_the_command_line_names_a_bad_certificate_and_refuses_security_options_i
     assert code == 2 and "only for opcua (Modbus TCP has no security of its own)" in err
 
 
+@pytest.mark.slow
 def test_planthub_gateway_with_a_certificate_serves_the_plant_to_a_trusted_plc(tmp_path, pki):
     """`planthub gateway opcua … --certificate --private-key --trust`, launched by the hub (live mode),
     and a PLC process with its trusted certificate setting the belt running over SignAndEncrypt."""

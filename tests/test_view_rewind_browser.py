@@ -15,6 +15,8 @@ import pytest
 from .helpers import ROOT
 from .view_support import BUNDLE, CHROMIUM, FLAGS, command_rows, hub, view
 
+pytestmark = pytest.mark.slow   # a paced run watched in a browser
+
 SCENARIO = ROOT / "scenarios" / "switch.yaml"
 RATE = 150   # switch.yaml's physics_rate: a checkpoint every 0.5 s is one every 75 ticks
 BACK = 150   # the checkpoint gone back to: t = 1 s

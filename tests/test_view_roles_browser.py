@@ -17,6 +17,8 @@ import pytest
 from .helpers import ROOT
 from .view_support import command_rows, hub, two_pages, view
 
+pytestmark = pytest.mark.slow   # one paced run of 50 s of wall time, watched by two browser tabs
+
 SCENARIO = ROOT / "scenarios" / "switch.yaml"
 EXERCISE = {"task": "Deliver both bottles, each to its lane.", "goals": [{"delivered": 2, "name": "both delivered"}]}
 
