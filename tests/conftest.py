@@ -16,10 +16,3 @@ def write_scenario(tmp_path):
         return path
     return write
 
-
-def pytest_collection_modifyitems(items):
-    """The files that hold a slow test first, the rest in their order: with the suite spread over
-    workers a file at a time (make test), the longest files start first and the short ones fill in
-    at the end, instead of one long file running alone after everything else."""
-    slow = {item.path for item in items if item.get_closest_marker("slow")}
-    items.sort(key=lambda item: item.path not in slow)   # a stable sort: each file's own order kept
