@@ -110,23 +110,26 @@ def check_exercise(checker, spec, plant: bool) -> Exercise | None:
     return Exercise(spec["task"], tuple(goals), float(spec.get("pass", 100)), line_of(checker.lines, ("exercise",)))
 
 
+def _at_most(goal: Goal, bottles, word: str, name, unjudged: str) -> Verdict:
+    """At most `goal.limit` of `bottles` (None: the plant cannot tell, for the reason `unjudged`),
+    the first five named."""
+    if bottles is None:
+        return Verdict(goal, False, f"not judged: {unjudged}")
+    named = "; ".join(name(b) for b in bottles[:5])
+    return Verdict(goal, len(bottles) <= goal.limit, f"{len(bottles)} {word}" + (f": {named}" if named else ""))
+
+
 def judge(goal: Goal, plant, faults: list[tuple[str, float]]) -> Verdict:
     """A goal judged on the plant summary (PlantSummary: delivered, misrouted, jams, per_minute,
     delivery_times, end) and the faults that started, as (name, start s)."""
     if goal.key == "delivered":
         return Verdict(goal, plant.delivered >= goal.limit, f"{plant.delivered} delivered")
     if goal.key == "misrouted":
-        if plant.misrouted is None:
-            return Verdict(goal, False, "not judged: no sink says which destinations its lane is for (`accepts`)")
-        wrong = plant.misrouted
-        named = "; ".join(f"{m.bottle} (for {m.destination}) at {m.sink}" for m in wrong[:5])
-        return Verdict(goal, len(wrong) <= goal.limit, f"{len(wrong)} misrouted" + (f": {named}" if named else ""))
+        return _at_most(goal, plant.misrouted, "misrouted", lambda m: f"{m.bottle} (for {m.destination}) at {m.sink}",
+                        "no sink says which destinations its lane is for (`accepts`)")
     if goal.key == "rejected":
-        if plant.rejected is None:
-            return Verdict(goal, False, "not judged: no sink takes rejects (`rejects: true`)")
-        out = plant.rejected
-        named = "; ".join(f"{r.bottle} (for {r.destination})" for r in out[:5])
-        return Verdict(goal, len(out) <= goal.limit, f"{len(out)} rejected" + (f": {named}" if named else ""))
+        return _at_most(goal, plant.rejected, "rejected", lambda r: f"{r.bottle} (for {r.destination})",
+                        "no sink takes rejects (`rejects: true`)")
     if goal.key == "longest_jam":
         if not plant.jams:
             return Verdict(goal, True, "no jam")
