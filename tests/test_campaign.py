@@ -159,15 +159,26 @@ class Campaign:
 
 
 def case_child(out: Path, limit: float = 60):
-    """The `planthub` child process running a case of the campaign writing to `out`, once it runs."""
+    """The process running a case of the campaign writing to `out`, once it runs: the one holding
+    the case's output.txt open (a fork of its worker's zygote has the zygote's command line)."""
     deadline = time.monotonic() + limit
     while time.monotonic() < deadline:
-        for process in psutil.process_iter(["cmdline"]):
-            line = process.info["cmdline"] or []
-            if "hub" in line and str(out / "cases") in " ".join(line) and "hub.campaign.case" not in line:
+        for process in psutil.process_iter():
+            try:
+                files = [f.path for f in process.open_files()]
+            except psutil.Error:   # another user's, or gone
+                continue
+            if any(f.startswith(str(out / "cases")) and f.endswith("/output.txt") for f in files):
                 return process
         time.sleep(0.1)
     pytest.fail(f"no case of {out} started within {limit} s")
+
+
+def forked_by_a_zygote(child) -> psutil.Process:
+    """The Dask worker whose zygote forked `child` (each case is a fork of its worker's warm zygote)."""
+    zygote = child.parent()
+    assert zygote.cmdline()[1:] == ["-m", "hub.campaign.zygote"]
+    return zygote.parent()
 
 
 def running(out: Path) -> None:
@@ -280,6 +291,23 @@ def test_a_scheduler_lost_mid_campaign_ends_it_with_its_files(tmp_path):
     assert f"campaign: {found['broken']}: stopping the running cases" in campaign.stderr
 
 
+def test_a_case_forked_by_a_zygote_is_the_case_run_by_hand(local, tmp_path):
+    """The warm start changes nothing of a case (the zygote ran the plant, pybullet and numba's
+    loops before it forked): its command from campaign.json in a fresh Python gives the same
+    outcomes, figures and recording."""
+    from hub.campaign.case import _ended, _figures, _outcomes
+
+    case = local.results()["cases"][0]
+    folder, again = str(local.out / case["folder"]), str(tmp_path / "again")
+    line = [part.replace(folder, again) for part in case["command"]]
+    done = subprocess.run(line, capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    assert done.returncode == case["exit_code"] == 1, done.stderr
+    assert _outcomes(tmp_path / "again" / "junit.xml") == case["outcomes"]
+    assert _figures(tmp_path / "again" / "summary.json") == case["figures"]
+    assert _ended(tmp_path / "again" / "summary.json") == case["ended"]
+    assert (tmp_path / "again" / "recording.csv").read_bytes() == (local.out / case["folder"] / "recording.csv").read_bytes()
+
+
 def test_a_campaign_on_a_scheduler_and_worker_of_dasks_command_line(dask_cluster, local, tmp_path):
     campaign = Campaign(tmp_path, write(tmp_path, SPEEDS), "--scheduler", dask_cluster)
     assert campaign.wait() == 1, campaign.stderr
@@ -302,9 +330,11 @@ def test_a_worker_killed_mid_case_has_its_case_run_again_elsewhere(tmp_path):
     campaign = Campaign(tmp_path, long_case(tmp_path, time_limit=60), "--workers", "2")
     try:
         child = case_child(campaign.out)
-        worker = child.parent()
+        worker = forked_by_a_zygote(child)
+        zygote = child.parent()
         worker.kill()   # SIGKILL: the worker process, not its case
-        child.wait(timeout=10)   # the case dies with it (its parent-death signal), not left running
+        child.wait(timeout=10)   # the case dies with it (zygote, then case: end of file, parent-death signal)
+        zygote.wait(timeout=10)
     finally:
         code = campaign.wait()
     assert code == 0, campaign.stderr
