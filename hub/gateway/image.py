@@ -32,6 +32,7 @@ class ProcessImage:
         # waiting plant at each of them only to find cycle_done unchanged held the server's thread up
         # at the GIL; the plant waits on handshake tags alone, so only they wake it.
         self._wakers = frozenset(t.slot for t in tags.tags if t.handshake)
+        self._order = [t.slot for t in tags.tags if not t.handshake] + [t.slot for t in tags.tags if t.handshake]
 
     # --- the protocol side
     def read(self, slot: str):
@@ -51,9 +52,11 @@ class ProcessImage:
         _log.warning("gateway: refused a write to %s: %s", where, why)
 
     def take_changed(self) -> dict:
-        """Inputs changed since the last call (the server publishes them)."""
+        """Inputs changed since the last call (the server publishes them), in the tag map's order with the
+        handshake tags last: a client notified of changes in the order they are published (an OPC UA
+        subscription) has a scan's values before its `cycle`."""
         with self._lock:
-            changed = {slot: self.values[slot] for slot in self.changed}
+            changed = {slot: self.values[slot] for slot in self._order if slot in self.changed}
             self.changed = set()
             return changed
 

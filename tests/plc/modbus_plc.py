@@ -1,7 +1,11 @@
 """A PLC over Modbus TCP (pymodbus's client) routing the bottling plant through `planthub gateway
 modbus`: `python -m tests.plc.modbus_plc TAGS.csv HOST:PORT --lanes A,B,C,D,E [--limit S]`. It
 waits for the server (up to --limit s), sets plc_ready, then answers every scan until the server
-goes away, and prints how many scans and decisions it made."""
+goes away, and prints how many scans and decisions it made.
+
+Each request is a round trip the plant waits on in lockstep: a scan's inputs come with the poll that
+sees the new `cycle` (all input registers in one read), the command coils go in one write and only
+when one of them changes (the gateway keeps the last value written), then `cycle_done`."""
 from __future__ import annotations
 
 import asyncio
@@ -40,6 +44,7 @@ async def main(args) -> int:
     start = address(commands[0])
     assert [address(c) for c in commands] == list(range(start, start + len(commands))), "command coils not contiguous"
     routing, last, scans = Routing(lanes), 0, 0
+    written = [False] * len(commands)   # the coils as the gateway holds them: every command starts off
     try:
         await client.write_coil(address("plc_ready"), True)
         while time.monotonic() < deadline:
@@ -51,7 +56,10 @@ async def main(args) -> int:
             counts = [words(regs, f"r{i}_read")[0] for i in pairs]
             destinations = [text(words(regs, f"r{i}_destination")) for i in pairs]
             bits = routing.scan(counts, destinations)
-            await client.write_coils(start, [bits[c] for c in commands])
+            coils = [bits[c] for c in commands]
+            if coils != written:
+                await client.write_coils(start, coils)
+                written = coils
             await client.write_register(address("cycle_done"), cycle)
             last, scans = cycle, scans + 1
         print(f"gave up after {args.limit:g} s", file=sys.stderr)

@@ -49,6 +49,7 @@ def main(args) -> int:
     counters = [at[f"r{i}_read"][1] for i in pairs]
     i_bytes = max(counters) + 2
     routing, last, scans = Routing(lanes), 0, 0
+    written = bytearray(q_bytes)   # the Q image as the gateway holds it: every command starts off
     try:
         _, byte, bit = at["plc_ready"]
         client.write_area(Area.MK, 0, byte, bytearray([1 << bit]))
@@ -69,7 +70,9 @@ def main(args) -> int:
             for c in commands:
                 _, byte, bit = at[c]
                 out[byte] |= bits[c] << bit
-            client.write_area(Area.PA, 0, 0, out)
+            if out != written:   # a request less when no command changes (the gateway keeps what was written)
+                client.write_area(Area.PA, 0, 0, out)
+                written = out
             client.write_area(Area.MK, 0, at["cycle_done"][1], bytearray(struct.pack(">H", cycle)))
             last, scans = cycle, scans + 1
         print(f"gave up after {args.limit:g} s", file=sys.stderr)
