@@ -471,3 +471,16 @@ def test_a_figure_plotted_against_a_parameter(local, tmp_path, capsys):
     case = local.out / "cases" / "000-belt_bottle_sensor"
     assert main(["plot", str(case), "bottle.body.position", "--against", "run.seed"]) == 2
     assert f"--against run.seed: {case} is no campaign's folder (it has no campaign.json)" in capsys.readouterr().err
+
+
+def test_a_case_started_afresh_without_a_zygote(tmp_path, monkeypatch):
+    """PLANTHUB_CAMPAIGN_FRESH=1 (and a zygote that would not serve, or no Linux): a fresh Python
+    per case, judged the same way."""
+    from hub.campaign import zygote
+    from hub.campaign.case import FRESH, run_case
+
+    monkeypatch.setenv(FRESH, "1")
+    found = run_case({"scenario": str(SCENARIO), "out": str(tmp_path / "case"), "judge": False,
+                      "overrides": {"run.duration": 0.5}, "resume": None, "time_limit": 60})
+    assert found["verdict"] == "passed" and found["figures"]["simulated_s"] == 0.5, found["reason"]
+    assert zygote._mine is None   # no zygote was started in this process
