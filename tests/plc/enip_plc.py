@@ -58,6 +58,7 @@ def main(args) -> int:
                     break
                 written.update(changed)
                 last, scans = cycle, scans + 1
+                time.sleep(POLL)   # the plant steps before its next scan: a poll right away would find none
             else:
                 print(f"gave up after {args.limit:g} s", file=sys.stderr)
                 return 1

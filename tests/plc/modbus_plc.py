@@ -18,6 +18,8 @@ from pymodbus.exceptions import ModbusException
 
 from tests.plc.routing import Routing, arguments, read_tags
 
+POLL = 0.0005   # s between two polls of `cycle`
+
 
 def text(words: list[int]) -> str:
     return struct.pack(f">{len(words)}H", *words).rstrip(b"\0").decode()
@@ -51,7 +53,7 @@ async def main(args) -> int:
             regs = (await client.read_input_registers(first, count=count)).registers
             cycle = words(regs, "cycle")[0]
             if cycle == last:
-                await asyncio.sleep(0.0005)
+                await asyncio.sleep(POLL)
                 continue
             counts = [words(regs, f"r{i}_read")[0] for i in pairs]
             destinations = [text(words(regs, f"r{i}_destination")) for i in pairs]
@@ -62,6 +64,7 @@ async def main(args) -> int:
                 written = coils
             await client.write_register(address("cycle_done"), cycle)
             last, scans = cycle, scans + 1
+            await asyncio.sleep(POLL)   # the plant steps before its next scan: a poll right away would find none
         print(f"gave up after {args.limit:g} s", file=sys.stderr)
         return 1
     except (ModbusException, ConnectionError, OSError, AttributeError):

@@ -16,6 +16,7 @@ from snap7.type import Area
 from tests.plc.routing import Routing, arguments, read_tags
 
 AREAS = {"I": Area.PE, "Q": Area.PA, "M": Area.MK}
+POLL = 0.0005   # s between two polls of `cycle`
 
 
 def where(address: str) -> tuple[str, int, int]:
@@ -56,7 +57,7 @@ def main(args) -> int:
         while time.monotonic() < deadline:
             cycle = struct.unpack(">H", client.read_area(Area.MK, 0, at["cycle"][1], 2))[0]
             if cycle == last:
-                time.sleep(0.0005)
+                time.sleep(POLL)
                 continue
             inputs = client.read_area(Area.PE, 0, 0, i_bytes)
             counts = [struct.unpack_from(">H", inputs, b)[0] for b in counters]
@@ -75,6 +76,7 @@ def main(args) -> int:
                 written = out
             client.write_area(Area.MK, 0, at["cycle_done"][1], bytearray(struct.pack(">H", cycle)))
             last, scans = cycle, scans + 1
+            time.sleep(POLL)   # the plant steps before its next scan: a poll right away would find none
         print(f"gave up after {args.limit:g} s", file=sys.stderr)
         return 1
     except (S7Error, OSError):   # the gateway stopped with the run: python-snap7 raises its own errors then
