@@ -145,9 +145,6 @@ class Bottle(Module):
         if "base_fraction" in params and params["model"] != "base_body":
             problems.append((("base_fraction",), "only the base_body model has a second body: "
                                                  "add `model: base_body` or drop base_fraction"))
-        if params["transport"] == "exact" and (params["shape"] == "hull" or params["model"] == "base_body"):
-            problems.append((("transport",), "free transport moves a plain rigid bottle only: "
-                                             "it needs shape cylinder and model simple or base_point"))
         profile = params.get("profile")
         if profile is not None:
             if params["shape"] != "hull":

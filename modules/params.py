@@ -15,9 +15,10 @@ def length(default=None, description=""):
 # A bottle's transport (hub/physics/transport.py): whether it may leave the engine while it rides
 # a belt on which nothing can touch it, and how many ticks its tests look forward.
 TRANSPORT = {
-    "transport": {"enum": ["engine", "exact"], "default": "engine",
-                  "description": "engine: the engine moves it throughout; exact: riding a belt with nothing within "
-                                 "reach it leaves the engine and follows the belt's law in numpy (free transport)"},
+    "transport": {"enum": ["free", "engine"], "default": "free",
+                  "description": "free: riding a belt with nothing within reach it leaves the engine and follows "
+                                 "the belt's law in the hub (free transport; a hull or two-body bottle stays in the "
+                                 "engine); engine: the engine moves it throughout"},
     "lookahead": {"type": "integer", "minimum": 2, "default": 6,
-                  "description": "transport exact: ticks its tests look forward; they are taken every lookahead − 1 ticks"},
+                  "description": "free transport: ticks its tests look forward; they are taken every lookahead − 1 ticks"},
 }

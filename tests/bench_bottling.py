@@ -30,7 +30,7 @@ PLANT = ROOT / "scenarios" / "bottling_plant.yaml"
 WINDOW = (100.0, 110.0)
 REPEATS = 2
 COMPARED = 150.0    # s of the plant run with and without rest for the deliveries
-FREE = {"defaults.source.transport": "exact"}   # every bottle of the plant may ride free (transport.py)
+FREE = {"defaults.source.transport": "free"}   # every bottle of the plant may ride free (transport.py)
 ENGINE = {"defaults.source.transport": "engine"}   # the engine moves every bottle
 
 
@@ -130,8 +130,8 @@ def bottling_plant() -> None:
           "| bare real-time factor |")
     print("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     ticks = round((WINDOW[1] - WINDOW[0]) * 150)
-    cases = (("free (`exact`, default)", None, True, "asleep (default)", "in the hub", FREE),
-             ("free (`exact`, default)", None, False, "asleep (default)", "over Zenoh", FREE),
+    cases = (("free (default)", None, True, "asleep (default)", "in the hub", FREE),
+             ("free (default)", None, False, "asleep (default)", "over Zenoh", FREE),
              ("engine", None, True, "asleep (default)", "in the hub", ENGINE),
              ("engine", None, False, "asleep (default)", "over Zenoh", ENGINE),
              ("engine", 0.0, True, "awake (`sleep_after: 0`)", "in the hub", ENGINE))
@@ -150,14 +150,14 @@ def bottling_plant() -> None:
 
     free, wall_free = deliveries(None, FREE)
     engine, wall_engine = deliveries(None, ENGINE)
-    compare("free transport", "transport", ("exact (default)", free, wall_free), ("engine", engine, wall_engine))
+    compare("free transport", "transport", ("free (default)", free, wall_free), ("engine", engine, wall_engine))
     awake, wall_awake = deliveries(0.0, ENGINE)
     compare("rest", "bottles at rest (transport: engine)", ("asleep", engine, wall_engine), ("awake", awake, wall_awake))
 
     print("\n### The whole plant (`make run`: 150 orders, routing over Zenoh)\n")
     print("| transport | simulated s | bottles into the sinks (rejects too) | wall s | real-time factor |")
     print("|---|---:|---:|---:|---:|")
-    for label, more in (("free (`exact`, default)", FREE), ("engine", ENGINE)):
+    for label, more in (("free (default)", FREE), ("engine", ENGINE)):
         wall, sim_ticks, delivered = whole_plant(more)
         print(f"| {label} | {sim_ticks / 150:.1f} | {delivered} | {wall:.1f} | {sim_ticks / 150 / wall:.1f}× |")
 

@@ -197,9 +197,9 @@ MODELS = [Setting("bottle model", m, {"defaults.bottle.model": m}) for m in ("ba
 GRIP = [Setting("grip law", "along (paper)", {"defaults.conveyor.grip": "along", "defaults.curve.grip": "along"})]
 REST = [Setting("rest", "off", {"run.sleep_after": 0})]
 EVENTS = [Setting("event-driven points", "on", {"run.event_driven": True})]
-# Free transport (hub/physics/transport.py): bottles of the `bottle` module allowed to ride free.
-FREE = [Setting("transport", "exact (free)", {"defaults.bottle.transport": "exact"})]
-# The bottling plant has it on (defaults.source.transport: exact): off, and looking less or further ahead than 6 ticks.
+# Free transport (hub/physics/transport.py) is every scene's default: the engine moving the bottles instead.
+FREE = [Setting("transport", "engine (not free)", {"defaults.bottle.transport": "engine"})]
+# The bottling plant: free transport off, and looking less or further ahead than 6 ticks.
 PLANT_TRANSPORT = [Setting("transport", "engine (not free)", {"defaults.source.transport": "engine"}),
                    Setting("free look-ahead", "4 ticks", {"defaults.source.lookahead": 4}),
                    Setting("free look-ahead", "8 ticks", {"defaults.source.lookahead": 8})]

@@ -2,7 +2,7 @@
 runs: every good bottle delivered reaches the sink of its destination, every bottle the filler
 left unfilled is pushed into the reject lane, every lane delivers, no bottle tips, falls, speeds
 or passes a closed gate, and nothing jams — with the engine moving every bottle and with free
-transport (transport: exact); routing by the plant-management participant over Zenoh gives the
+transport (the default); routing by the plant-management participant over Zenoh gives the
 run of the same logic in-process, bit for bit, either way; a participant with two lanes
 swapped makes `planthub test` fail naming the misrouted bottles."""
 import csv
@@ -52,7 +52,7 @@ def deliveries(scenario, directory):
     return taken, [(ident, wanted[ident], sink) for sink, ident in taken if LANES[sink] != wanted[ident]]
 
 
-@pytest.mark.parametrize("transport", ["engine", "exact"])   # exact: every bottle may ride free
+@pytest.mark.parametrize("transport", ["engine", "free"])   # free (the default): every bottle may ride free
 def test_good_bottles_reach_their_destinations_and_the_bad_the_reject_lane_soundly(tmp_path, transport):
     overrides = {"run.duration": DURATION, "objects.filler.faults": FAULTS, "defaults.source.transport": transport,
                  **IN_PROCESS}
@@ -89,7 +89,7 @@ def test_the_run_summary_counts_what_the_event_log_shows_and_finds_no_jam(tmp_pa
     assert "  misrouted    none" in stdout and "  jams         none" in stdout
 
 
-@pytest.mark.parametrize("transport", ["engine", "exact"])
+@pytest.mark.parametrize("transport", ["engine", "free"])
 def test_routing_over_the_bus_gives_the_in_process_run_bit_for_bit(tmp_path, transport):
     for name, overrides in (("bus", {}), ("in_process", IN_PROCESS)):
         run_scenario(SCENARIO, tmp_path / name, {"run.duration": 40.0, "defaults.source.transport": transport,

@@ -76,7 +76,8 @@ def test_a_resumed_run_goes_on_bit_for_bit(tmp_path, multibody_bottles, name, se
                                        "inertia, which the engine works out again only as it integrates "
                                        "(btRigidBody, PhysicsWorld.MAXIMAL); a multibody's it works out each tick")
 def test_rigid_bottles_in_contact_depart_after_a_restore(tmp_path):
-    whole, resumed, at, _ = _saved_and_resumed(tmp_path, "belt_bottle_sensor.yaml", 1.5)
+    whole, resumed, at, _ = _saved_and_resumed(tmp_path, "belt_bottle_sensor.yaml", 1.5,
+                                               {"objects.bottle.transport": "engine"})
     assert _after(resumed / "recording.csv", at) == _after(whole / "recording.csv", at)
 
 

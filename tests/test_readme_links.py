@@ -45,7 +45,7 @@ def anchors(path: Path) -> set[str]:
 
 
 def test_an_anchor_is_what_github_makes_of_a_heading():
-    assert anchor("Free transport (`transport: exact`)") == "free-transport-transport-exact"
+    assert anchor("Free transport (the default, `transport: free`)") == "free-transport-the-default-transport-free"
     assert anchor("Curves, joined belts, bottle models and the paper's tests") == \
         "curves-joined-belts-bottle-models-and-the-papers-tests"
     assert anchor("Choosing settings: speed against error") == "choosing-settings-speed-against-error"

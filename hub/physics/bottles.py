@@ -11,7 +11,7 @@ with quiet_stderr():
     import pybullet
 
 GRIPS = ("centre", "base", "base_body")
-TRANSPORTS = ("exact", "engine")
+TRANSPORTS = ("free", "engine")
 
 
 class Bottles:
@@ -47,7 +47,7 @@ class Bottles:
 
     def add(self, base, radius: float, height: float, mass: float, label: str, *, hull=None,
             grip_at: str = "centre", base_fraction: float = 0.05, ring: float, maximal: bool,
-            transport: str = "engine", lookahead: int = LOOKAHEAD) -> int:
+            transport: str = "free", lookahead: int = LOOKAHEAD) -> int:
         """An upright bottle standing on `base` (the centre of its bottom face).
 
         Collision shape: the cylinder's body `ring` narrower than `radius`, with its widest ring
@@ -59,12 +59,12 @@ class Bottles:
         the bottom), or `base_body` (the paper's model: a second body of `base_fraction` of the
         mass at the base, under a fixed constraint, takes the force). `maximal`: a rigid body in
         maximal coordinates rather than a one-link multibody (PhysicsWorld says why).
-        `transport`: `exact` lets a plain rigid bottle (no hull, no second body) leave the engine
-        while it rides a belt on which nothing can touch it, looking `lookahead` ticks forward
-        (transport.py); `engine` keeps it in the engine throughout.
+        `transport`: `free` (the default) lets a plain rigid bottle (no hull, no second body: those
+        stay in the engine) leave the engine while it rides a belt on which nothing can touch it,
+        looking `lookahead` ticks forward (transport.py); `engine` keeps it in the engine throughout.
         """
         if transport not in TRANSPORTS:
-            raise ValueError(f"transport must be exact or engine, not {transport!r}")
+            raise ValueError(f"transport must be free or engine, not {transport!r}")
         self.bodies.check_open()
         if grip_at not in GRIPS:
             raise ValueError(f"grip_at must be centre, base or base_body, not {grip_at!r}")
@@ -108,7 +108,7 @@ class Bottles:
         # Rests, and rides free, only as a plain rigid body whose box rest.boxes knows (no hull, no second body).
         plain = maximal and hull is None and grip_at != "base_body"
         self.rest.add(plain, radius, half)
-        self.transport.add(plain and transport == "exact", lookahead)
+        self.transport.add(plain and transport == "free", lookahead)
         return index
 
     def parts(self, body: int):

@@ -237,7 +237,7 @@ class PhysicsWorld:
         return row
 
     def add_bottle(self, base, radius: float, height: float, mass: float, label: str, *, hull=None,
-                   grip_at: str = "centre", base_fraction: float = 0.05, transport: str = "engine",
+                   grip_at: str = "centre", base_fraction: float = 0.05, transport: str = "free",
                    lookahead: int = LOOKAHEAD) -> int:
         """An upright bottle standing on `base` (bottles.py; RING and MAXIMAL above); `transport`
         and `lookahead` (ticks): whether and how it may ride free (transport.py)."""

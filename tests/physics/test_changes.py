@@ -34,7 +34,7 @@ def test_a_level_of_detail_registered_on_the_world_hears_every_kind_of_change():
         gate = world.add_switchable_boxes([(0.9, 0.0, 0.05)], [(0.005, 0.1, 0.05)], [0.0], solid=True)
         plate = world.add_moving_boxes([(0.5, -0.2, 0.04)], [(0.06, 0.005, 0.04)], [0.0], axis=(0, 1, 0))
         arm = world.add_arm((0.3, 0.5, 0.0), 0.0, 0.1)
-        bottles = [world.add_bottle((0.2 + 0.1 * i, 0, 0), 0.03, 0.1, 0.05, f"b{i}", transport="exact")
+        bottles = [world.add_bottle((0.2 + 0.1 * i, 0, 0), 0.03, 0.1, 0.05, f"b{i}", transport="free")
                    for i in range(4)]
         world.step(30)                          # they come to rest on the still belt
         heard.kinds.clear()                     # building announced the gate's first state
@@ -109,7 +109,7 @@ def test_a_belt_start_wakes_its_resting_bottles_or_lets_them_ride_off_free():
     with PhysicsWorld(RATE) as world:
         world.add_support(0.0, (0.0, -0.1, 2.0, 0.1))
         belt = world.add_belt_field(Straight(Pose(0.0, 0.0, 0.0, 0.0), 2.0), 0.08, -0.02, 0.1, 16.0, 0.0)
-        free = world.add_bottle((0.3, 0, 0), 0.03, 0.1, 0.05, "free", transport="exact")
+        free = world.add_bottle((0.3, 0, 0), 0.03, 0.1, 0.05, "free", transport="free")
         engine = world.add_bottle((0.6, 0, 0), 0.03, 0.1, 0.05, "engine", transport="engine")
         world.step(30)
         assert world.rest.resting[[free, engine]].all()

@@ -36,7 +36,7 @@ def crossing(transport: str) -> tuple[int, bool, np.ndarray]:
 
 def test_a_free_bottle_crosses_the_light_barrier_at_the_tick_the_engine_driven_one_does():
     engine_tick, was_free, engine_end = crossing("engine")
-    free_tick, is_free, free_end = crossing("exact")
+    free_tick, is_free, free_end = crossing("free")
     assert not was_free and is_free              # the second crossed it in free transport
     # Within one tick (the stated tolerance): the engine adds only its rocking and sink.
     assert abs(free_tick - engine_tick) <= 1
@@ -55,7 +55,7 @@ def test_free_bottles_come_back_before_anything_touches_them(name, key, back):
     """…and the scene ends as it does with the engine moving every bottle: the same bottles
     taken by the same sinks, the others within 1 cm of where they stand then."""
     ends = {}
-    for transport in ("engine", "exact"):
+    for transport in ("engine", "free"):
         scenario = load_scenario(SCENARIOS / f"{name}.yaml", {key: transport})
         with Run(scenario) as run:
             run.start()
@@ -65,7 +65,7 @@ def test_free_bottles_come_back_before_anything_touches_them(name, key, back):
             on_stage = world.bodies.in_play_rows()
             ends[transport] = (sorted(world.bodies.parked), world.positions[on_stage].copy(), world.transport.entered,
                                world.transport.left)
-    (parked, stand, _, _), (free_parked, free_stand, entered, left) = ends["engine"], ends["exact"]
+    (parked, stand, _, _), (free_parked, free_stand, entered, left) = ends["engine"], ends["free"]
     assert entered > 0 and (left > 0) == back
     assert free_parked == parked
     assert np.abs(free_stand - stand).max(initial=0.0) < 0.01
@@ -88,8 +88,8 @@ def test_a_free_bottle_comes_back_before_it_catches_up_with_another_free_one():
     # The slow belt grips weakly (k = 2/s): the one behind comes onto it at 0.5 m/s and slows
     # over ~20 cm, catching up with the one ahead, which rides at 0.1 m/s.
     with belts_world(0.5, 0.1, k_slow=2.0) as world:
-        front = world.add_bottle((1.05, 0, 0), 0.03, 0.1, 0.05, "front", transport="exact")
-        back = world.add_bottle((0.3, 0, 0), 0.03, 0.1, 0.05, "back", transport="exact")
+        front = world.add_bottle((1.05, 0, 0), 0.03, 0.1, 0.05, "front", transport="free")
+        back = world.add_bottle((0.3, 0, 0), 0.03, 0.1, 0.05, "back", transport="free")
         both_free = False
         for _ in range(750):
             world.step(1)
@@ -104,7 +104,7 @@ def test_free_transport_is_bit_identical_in_two_runs():
     def run():
         with belts_world(0.5, 0.2) as world:
             for k in range(6):
-                world.add_bottle((0.05 + 0.15 * k, 0, 0), 0.03, 0.1, 0.05, f"b{k}", transport="exact")
+                world.add_bottle((0.05 + 0.15 * k, 0, 0), 0.03, 0.1, 0.05, f"b{k}", transport="free")
             states = []
             for _ in range(40):
                 world.step(15)
@@ -115,16 +115,24 @@ def test_free_transport_is_bit_identical_in_two_runs():
     assert a.tobytes() == b.tobytes()
 
 
-def test_what_free_transport_cannot_move_is_refused_by_name(tmp_path):
-    path = tmp_path / "hull.yaml"
-    path.write_text("planthub: 1\nname: hull\nrun: {duration: 1.0}\nobjects:\n"
-                    "  b: {module: bottle, position: [0, 0, 0], shape: hull, transport: exact}\n")
-    with pytest.raises(ScenarioError, match=r"objects\.b\.transport.*free transport moves a plain rigid bottle only"):
+def test_a_hull_or_two_body_bottle_stays_in_the_engine_and_a_wrong_transport_is_named(tmp_path):
+    # Free is the default; what free transport cannot move (a hull, the paper's two bodies) rides in the engine.
+    for more, free in (({"objects.bottle.shape": "hull"}, False), ({"objects.bottle.model": "base_body"}, False),
+                       ({}, True)):
+        with Run(load_scenario(SCENARIOS / "belt_bottle_sensor.yaml", more)) as run:
+            run.start()
+            world = run.plant.world
+            world.step(150)
+            assert world.velocities[0, 0] > 0.4 and bool(world.transport.free[0]) is free, more
+    path = tmp_path / "old.yaml"
+    path.write_text("planthub: 1\nname: old\nrun: {duration: 1.0}\nobjects:\n"
+                    "  b: {module: bottle, position: [0, 0, 0], transport: exact}\n")
+    with pytest.raises(ScenarioError, match=r"old\.yaml:5.*objects\.b\.transport.*'exact' is not one of \['free', 'engine'\]"):
         load_scenario(path)
-    with PhysicsWorld(150) as world, pytest.raises(ValueError, match="transport must be exact or engine, not 'free'"):
-        world.add_bottle((0, 0, 0), 0.03, 0.1, 0.05, "b", transport="free")
+    with PhysicsWorld(150) as world, pytest.raises(ValueError, match="transport must be free or engine, not 'exact'"):
+        world.add_bottle((0, 0, 0), 0.03, 0.1, 0.05, "b", transport="exact")
     with PhysicsWorld(150) as world, pytest.raises(ValueError, match="look-ahead must be a whole number of ticks, at least 2"):
-        world.add_bottle((0, 0, 0), 0.03, 0.1, 0.05, "b", transport="exact", lookahead=1)
+        world.add_bottle((0, 0, 0), 0.03, 0.1, 0.05, "b", transport="free", lookahead=1)
 
 
 def magazine(transport: str, spacing: float = 0.1):
@@ -156,7 +164,7 @@ def magazine(transport: str, spacing: float = 0.1):
 def test_a_resting_line_rides_off_free_when_its_belt_starts_and_rests_again_without_the_engine():
     (_, engine_run, engine_end), engine = magazine("engine")
     engine.close()
-    (rested, running, end), world = magazine("exact")
+    (rested, running, end), world = magazine("free")
     with world:
         t = world.transport
         assert t.started == 5 and t.stopped == 5     # from rest to free and back, each bottle once
@@ -179,7 +187,7 @@ def test_a_bottle_setting_off_between_rails_is_pulled_along_them_not_into_them()
         for side in (1, -1):
             world.add_static_box((1.5, side * 0.06, 0.04), (1.5, 0.01, 0.04))
         world.check_free = world.check_rest = True
-        row = world.add_bottle((0.5, 0, 0), 0.03, 0.1, 0.05, "b", transport="exact")
+        row = world.add_bottle((0.5, 0, 0), 0.03, 0.1, 0.05, "b", transport="free")
         world.step(60)
         assert world.rest.resting[row]
         world.set_field_speed(belt, 0.5)
@@ -199,8 +207,8 @@ def test_two_free_bottles_where_the_first_crosses_onto_a_slower_belt_come_back_b
     # not both go free: its take-free look goes 12 ticks forward.
     with belts_world(0.5, slow) as world:
         world.check_rest = False
-        first = world.add_bottle((lead, 0, 0), 0.03, 0.1, 0.05, "lead", transport="exact", lookahead=ahead)
-        second = world.add_bottle((lead - 0.06 - gap, 0, 0), 0.03, 0.1, 0.05, "back", transport="exact",
+        first = world.add_bottle((lead, 0, 0), 0.03, 0.1, 0.05, "lead", transport="free", lookahead=ahead)
+        second = world.add_bottle((lead - 0.06 - gap, 0, 0), 0.03, 0.1, 0.05, "back", transport="free",
                                   lookahead=ahead)
         both_free = False
         for _ in range(400):
@@ -218,7 +226,7 @@ def test_a_free_bottle_comes_back_before_a_wall_when_its_belt_speeds_up(distance
         world.add_support(0.0, (0.0, -0.07, 3.0, 0.07))
         belt = world.add_belt_field(Straight(Pose(0.0, 0.0, 0.0, 0.0), 3.0), 0.05, -0.02, 0.1, 16.0, 0.1)
         world.add_static_box((1.01, 0.0, 0.04), (0.01, 0.07, 0.04))   # a wall across the belt, its face at x = 1
-        row = world.add_bottle((0.7, 0, 0), 0.03, 0.1, 0.05, "b", transport="exact")
+        row = world.add_bottle((0.7, 0, 0), 0.03, 0.1, 0.05, "b", transport="free")
         world.step(1)
         while world.positions[row, 0] + 0.03 < 1.0 - distance:
             world.step(1)
@@ -233,7 +241,7 @@ def test_a_queue_standing_touching_rides_off_free_as_a_train_and_rests_again_wit
     # law at one velocity, bit for bit, moves them alike, so they ride free touching.
     (_, engine_run, engine_end), engine = magazine("engine", spacing=0.06)
     engine.close()
-    (rested, running, end), world = magazine("exact", spacing=0.06)
+    (rested, running, end), world = magazine("free", spacing=0.06)
     with world:
         t = world.transport
         assert t.started == 5 and t.stopped == 5 and t.entered == 0 and t.left == 0
@@ -261,7 +269,7 @@ def test_a_train_comes_back_into_the_engine_whole():
     with rail_world() as world:
         belt = 0
         world.set_field_speed(belt, 0.0)
-        rows = [world.add_bottle((0.8 + 0.06 * k, 0, 0), 0.03, 0.1, 0.05, f"b{k}", transport="exact")
+        rows = [world.add_bottle((0.8 + 0.06 * k, 0, 0), 0.03, 0.1, 0.05, f"b{k}", transport="free")
                 for k in range(3)]
         world.step(60)
         assert world.rest.resting[rows].all()
@@ -278,7 +286,7 @@ def test_a_train_comes_back_into_the_engine_whole():
 def test_a_bottle_riding_against_a_guard_rail_slides_along_it_free():
     # Put down 0.1 mm from the rail, the belt's law takes it along the rail and never into it.
     ends = {}
-    for transport in ("engine", "exact"):
+    for transport in ("engine", "free"):
         with rail_world() as world:
             row = world.add_bottle((0.2, 0.0199, 0), 0.03, 0.1, 0.05, "b", transport=transport)
             free = 0
@@ -286,14 +294,14 @@ def test_a_bottle_riding_against_a_guard_rail_slides_along_it_free():
                 world.step(1)    # check_free: it may touch the rail, no deeper than when it went free
                 free += bool(world.transport.free[row])
             ends[transport] = (world.positions[row].copy(), free, world.transport.entered)
-    (engine_end, _, _), (end, free, entered) = ends["engine"], ends["exact"]
+    (engine_end, _, _), (end, free, entered) = ends["engine"], ends["free"]
     assert entered == 1 and free > 100           # free from soon after it got going, to the end
     assert np.abs(end[:2] - engine_end[:2]).max() < 1e-3
 
 
 def test_check_free_names_a_free_bottle_pressed_into_a_rail_or_into_its_train():
     # The allowances above are narrow: a train at one velocity, a rail no deeper than before.
-    (_, _, _), world = magazine("exact", spacing=0.06)
+    (_, _, _), world = magazine("free", spacing=0.06)
     with world:
         t, floors = world.transport, world.engine.floors
         fixed = world.engine.fixed_bodies()
@@ -305,7 +313,7 @@ def test_check_free_names_a_free_bottle_pressed_into_a_rail_or_into_its_train():
         with pytest.raises(RuntimeError, match=r"free bottles b0 and b1 touch"):
             t.check(world.tick, floors, fixed)
     with rail_world() as world:
-        row = world.add_bottle((0.2, 0.0199, 0), 0.03, 0.1, 0.05, "b", transport="exact")
+        row = world.add_bottle((0.2, 0.0199, 0), 0.03, 0.1, 0.05, "b", transport="free")
         world.step(100)
         assert world.transport.free[row]
         world.positions[row, 1] += 0.001              # a millimetre into the rail
@@ -325,7 +333,7 @@ def test_a_bottle_deep_in_an_open_gate_does_not_slide_along_it_when_it_closes():
     with PhysicsWorld(150) as world:
         world.check_free = world.check_rest = True
         plain_belt(world)
-        row = world.add_bottle((0.05, 0, 0), 0.03, 0.1, 0.05, "a", transport="exact")
+        row = world.add_bottle((0.05, 0, 0), 0.03, 0.1, 0.05, "a", transport="free")
         part = world.add_switchable_boxes([(1.0, 0.035, 0.04)], [(0.9, 0.015, 0.04)], [0.0], solid=False)
         world.step(150)
         world.set_solid(part, True)
@@ -339,7 +347,7 @@ def test_a_bottle_falling_onto_a_free_one_brings_it_back_first():
     with PhysicsWorld(150) as world:
         world.check_free = world.check_rest = True     # the engine's word at every tick
         plain_belt(world)
-        below = world.add_bottle((0.05, 0, 0), 0.03, 0.1, 0.05, "below", transport="exact")
+        below = world.add_bottle((0.05, 0, 0), 0.03, 0.1, 0.05, "below", transport="free")
         world.add_bottle((0.105, 0, 0.3), 0.03, 0.1, 0.05, "above", transport="engine")
         world.step(60)
         assert world.transport.entered >= 1 and not world.transport.free[below]
@@ -353,7 +361,7 @@ def test_a_bottle_put_onto_a_belt_above_lists_the_boxes_up_there():
         plain_belt(world)
         plain_belt(world, 0.3)
         world.add_static_box((0.29, 0.0, 0.34), (0.01, 0.07, 0.04))   # a stopper on the upper belt, its face at 0.28
-        row = world.add_bottle((0.05, 0, 0), 0.03, 0.1, 0.05, "a", transport="exact")
+        row = world.add_bottle((0.05, 0, 0), 0.03, 0.1, 0.05, "a", transport="free")
         world.step(90)
         assert world.transport.free[row]
         world.park(row)
@@ -376,7 +384,7 @@ def test_a_free_bottle_comes_back_before_a_bottle_thrown_in_the_engine_reaches_i
         world.check_free = world.check_rest = True     # the engine's word at every tick
         world.add_support(0.0, (0.0, -0.07, 3.0, 0.07))
         world.add_belt_field(Straight(Pose(0.0, 0.0, 0.0, 0.0), 3.0), 0.05, -0.02, 0.1, 2.0, 0.5)
-        ahead = world.add_bottle((lead, 0, 0), 0.03, 0.1, 0.05, "ahead", transport="exact")
+        ahead = world.add_bottle((lead, 0, 0), 0.03, 0.1, 0.05, "ahead", transport="free")
         thrown = world.add_bottle((0.05, 0, 0), 0.03, 0.1, 0.05, "thrown", transport="engine")
         world.step(90)
         assert world.transport.free[ahead] and not world.transport.free[thrown]
@@ -392,7 +400,7 @@ def test_a_bottle_spinning_on_a_belt_stays_in_the_engine(spin, goes_free):
     with PhysicsWorld(150) as world:
         world.add_support(0.0, (0.0, -0.07, 3.0, 0.07))
         world.add_belt_field(Straight(Pose(0.0, 0.0, 0.0, 0.0), 3.0), 0.05, -0.02, 0.1, 16.0, 0.5, grip="along")
-        row = world.add_bottle((0.3, 0, 0), 0.03, 0.1, 0.05, "b", transport="exact")
+        row = world.add_bottle((0.3, 0, 0), 0.03, 0.1, 0.05, "b", transport="free")
         spun_or_thrown(world, row, spin=(0.0, 0.0, spin))
         world.step(120)
         assert bool(world.transport.entered) == goes_free
@@ -410,7 +418,7 @@ def test_a_fast_free_bottle_comes_back_before_a_thin_closed_gate_across_its_belt
         world.add_support(0.0, (0.0, -0.1, 3.0, 0.1))
         world.add_belt_field(Straight(Pose(0.0, 0.0, 0.0, 0.0), 3.0), 0.08, -0.02, 0.1, 16.0, speed)
         world.add_switchable_boxes([(1.5, 0.0, 0.05)], [(0.0025, 0.1, 0.05)], [0.0], solid=True)
-        bottle = world.add_bottle((start, 0, 0), 0.03, 0.1, 0.05, "b", transport="exact")
+        bottle = world.add_bottle((start, 0, 0), 0.03, 0.1, 0.05, "b", transport="free")
         world.step(int(150 * 1.6 / speed))
         t = world.transport
         assert t.entered == 1 and t.left == 1 and not t.free[bottle]     # rode free, came back, held at the gate
