@@ -365,6 +365,7 @@ def cost_sections(report: Report) -> None:
     from .bench_campaign import campaign
     from .bench_checkpoint import checkpoints
     from .bench_gateway import gateway
+    from .bench_hall import scale
     from .bench_plant import plant_elements
     from .fmus import bench_petri
 
@@ -373,7 +374,7 @@ def cost_sections(report: Report) -> None:
                           ("model_exchange", bench.model_exchange, ()),
                           ("event_latency", bench.event_latency, ()), ("plant_elements", plant_elements, ()),
                           ("flush", bench.flush_cost, ()), ("lockstep", bus_lockstep, ()), ("data_plane", data_plane, ()),
-                          ("watched_plant", watched_plant, ()), ("bottling_plant", bottling_plant, ()),
+                          ("watched_plant", watched_plant, ()), ("bottling_plant", bottling_plant, ()), ("scale", scale, ()),
                           ("gateway", gateway, ()), ("campaign", campaign, ()), ("checkpoints", checkpoints, ()),
                           ("petri", bench_petri.markdown, ()), ("view", bench_view.main, ([],))):
         captured(report, key, fn, *args)

@@ -232,12 +232,13 @@ class Rest:
         return self._group(seeds, positions) if seeds.any() else resting[:0]
 
     def _group(self, seeds: np.ndarray, positions) -> np.ndarray:
+        # Outwards from the seeds, the newly joined against every resting box: the cost grows with
+        # the group, not with the square of the resting set (a hall's thousand resting bottles).
         resting, centres, extents = self._resting_set(positions)
-        joined = overlapping(centres, extents, centres, extents)
         woken = seeds.copy()
         frontier = seeds
         while frontier.any():
-            frontier = joined[frontier].any(axis=0) & ~woken
+            frontier = overlapping(centres[frontier], extents[frontier], centres, extents).any(axis=0) & ~woken
             woken |= frontier
         return resting[woken]
 

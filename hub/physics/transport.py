@@ -87,6 +87,8 @@ EVERY = 15            # ticks between two looks for bottles that may leave the e
 RETRY = 15            # ticks before a bottle found near something is looked at again
 LIST = 0.1            # m: the fixed boxes within this of a free bottle are the ones it is tested against
 NEAR = 32             # boxes a bottle's list holds; one with more within LIST stays in the engine
+CELL = 0.25           # m: the side of a cell of the fixed boxes' grid (`with_grid`), at least
+CELLS = 1 << 20       # cells the grid has at most: a larger floor gets larger cells
 
 
 class FreeTransport:
@@ -158,7 +160,7 @@ class FreeTransport:
             c = np.array([b[0] for b in fixed_boxes], float)
             h = np.array([b[1] for b in fixed_boxes], float)
             yaw = np.array([b[2] for b in fixed_boxes], float)
-            self._fixed = np.column_stack((c, h, np.cos(yaw), np.sin(yaw)))
+            self._fixed = with_grid(np.column_stack((c, h, np.cos(yaw), np.sin(yaw))))
         self._moving = moving
         self.offsets = np.zeros(len(self.free))
         for row, offset in offsets.items():
@@ -464,8 +466,8 @@ class FreeTransport:
 def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at, near, near_count,
                table, boxes):
     """(len(rows),): whether each of `rows`, headed on for `times` × its look-ahead (n ticks),
-    could reach a fixed box (`boxes`, FreeTransport._fixed: centre, half extents, cos and sin of
-    the yaw, one a row).
+    could reach a fixed box (`boxes`, FreeTransport._fixed: the table of centre, half extents,
+    cos and sin of the yaw, one a row, and its grid: `with_grid`).
 
     Its way: n ticks at its velocity v, plus what the belt's pull adds — a pull that does
     not grow (the relaxing law, or friction's constant cap; a belt's speed change looks
@@ -489,8 +491,11 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
     on pressed against a guard rail, at one velocity along it), that box cannot stop it
     (`_slides`).
 
-    Row by row and, for each, box by box of its list (listed again first where it is stale)."""
-    c, h, cos, sin = boxes[:, 0:3], boxes[:, 3:6], boxes[:, 6], boxes[:, 7]
+    Row by row and, for each, box by box of its list (listed again first where it is stale), or
+    of the grid's cells its way can reach."""
+    fixed, grid = boxes
+    c, h, cos, sin = fixed[:, 0:3], fixed[:, 3:6], fixed[:, 6], fixed[:, 7]
+    found = np.empty(c.shape[0], np.int64)
     hit = np.zeros(rows.shape[0], np.bool_)
     for i in range(rows.shape[0]):
         n_ = rows[i]
@@ -519,11 +524,16 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
         straight = _belt(n_, n, dt, positions, velocities, pulls, table) >= 0
         # The list holds every box its way can reach only while the way, widened, stays within
         # LIST/2 of where it is (it is within LIST/2 of where it was listed): a longer way (a fast
-        # bottle over a long look) is tested against every box, those out of its reach skipped.
+        # bottle over a long look) is tested against every box of the grid's cells it can reach,
+        # those out of its reach skipped.
         far = math.hypot(wx, wy) + math.hypot(gx, gy) + widen
         every = far > LIST / 2.0
-        for j in range(c.shape[0] if every else near_count[n_]):
-            k = j if every else near[n_, j]
+        count = 0
+        if every:
+            reach = radii[n_] + far
+            count = _in_cells(grid, px - reach, px + reach, py - reach, py + reach, found)
+        for j in range(count if every else near_count[n_]):
+            k = found[j] if every else near[n_, j]
             if abs(positions[n_, 2] - c[k, 2]) > h[k, 2] + half_heights[n_] + FIXED_MARGIN:
                 continue
             if every and math.hypot(px - c[k, 0], py - c[k, 1]) - math.hypot(h[k, 0], h[k, 1]) > radii[n_] + far:
@@ -621,10 +631,16 @@ def _advance(rows, positions, orientations, velocities, masses, offsets, dt, exp
 @njit(cache=True)
 def _relist(n, positions, radii, half_heights, listed_at, near, near_count, boxes):
     """Body `n`'s list: the fixed boxes (`_fixed_hit`) its upright footprint is within LIST of,
-    horizontally and in height, the first NEAR of them, and how many there are."""
-    c, h, cos, sin = boxes[:, 0:3], boxes[:, 3:6], boxes[:, 6], boxes[:, 7]
+    horizontally and in height, the first NEAR of them, and how many there are: of the boxes in
+    the grid's cells within LIST of its footprint."""
+    fixed, grid = boxes
+    c, h, cos, sin = fixed[:, 0:3], fixed[:, 3:6], fixed[:, 6], fixed[:, 7]
+    reach = radii[n] + LIST
+    px, py = positions[n, 0], positions[n, 1]
+    found = np.empty(c.shape[0], np.int64)
     count = 0
-    for k in range(c.shape[0]):
+    for j in range(_in_cells(grid, px - reach, px + reach, py - reach, py + reach, found)):
+        k = found[j]
         if abs(positions[n, 2] - c[k, 2]) > h[k, 2] + half_heights[n] + FIXED_MARGIN + LIST:
             continue
         dx, dy = positions[n, 0] - c[k, 0], positions[n, 1] - c[k, 1]
@@ -943,7 +959,7 @@ def _near(rows, times, play, dt, positions, orientations, velocities, spins, rad
     near = _touching(rows, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
                      most, pulls, free, free, against, table, parts[:, 0:3],
                      _grown(parts[:, 3:6], parts[:, 6:9], ahead, rows, times, dt))
-    if boxes.shape[0]:
+    if boxes[0].shape[0]:
         near = near | _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at,
                                  near_list, near_count, table, boxes)
     return near
@@ -982,7 +998,7 @@ def _leave(rows, pulled, play, dt, positions, orientations, velocities, spins, m
     close = _touching(these, play, 2.0, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
                       most, pulls, free, joined, np.ones(free.shape[0], np.bool_), table, parts[:, 0:3],
                       _grown(parts[:, 3:6], parts[:, 6:9], ahead, these, 2.0, dt))
-    if boxes.shape[0] and not close.all():
+    if boxes[0].shape[0] and not close.all():
         rest = these[~close]
         hit = _fixed_hit(rest, 2.0, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at, near_list,
                          near_count, table, boxes)
@@ -998,4 +1014,66 @@ def _leave(rows, pulled, play, dt, positions, orientations, velocities, spins, m
 
 
 _NO_PARTS = np.zeros((0, 9))   # moving parts' boxes: centre, half extents, growth (FreeTransport._part_boxes)
-_NO_BOXES = np.zeros((0, 8))   # fixed boxes: centre, half extents, cos and sin of the yaw (_fixed_hit)
+
+
+def with_grid(table: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The fixed boxes as `_fixed_hit` and `_relist` take them: `table` (centre, half extents, cos
+    and sin of the yaw, a row each) and a grid over the floor of square cells (CELL, or larger
+    where the floor would have more than CELLS), each cell listing the boxes whose bounding
+    rectangle covers it, so that a bottle's tests look at the boxes near it, not at all of a
+    hall's. The grid is one int64 array: the first cell's indices (x, y), the cells across (x,
+    y), the boxes, the cell size in µm; then each box's first and last cell (x, x, y, y); then
+    where each cell's list begins (cells + 1); then the lists."""
+    m = table.shape[0]
+    if m == 0:
+        return table, np.array([0, 0, 0, 0, 0, round(CELL * 1e6)], np.int64)
+    cx, cy, hx, hy, cos, sin = table[:, 0], table[:, 1], table[:, 3], table[:, 4], table[:, 6], table[:, 7]
+    ex, ey = np.abs(cos) * hx + np.abs(sin) * hy, np.abs(sin) * hx + np.abs(cos) * hy
+    span = max(float((cx + ex).max() - (cx - ex).min()), float((cy + ey).max() - (cy - ey).min()))
+    cell = max(CELL, span / math.sqrt(CELLS) * 1.01)
+    um = round(cell * 1e6)
+    cell = um / 1e6
+    lo_x, hi_x = np.floor((cx - ex) / cell).astype(np.int64), np.floor((cx + ex) / cell).astype(np.int64)
+    lo_y, hi_y = np.floor((cy - ey) / cell).astype(np.int64), np.floor((cy + ey) / cell).astype(np.int64)
+    x0, y0 = int(lo_x.min()), int(lo_y.min())
+    nx, ny = int(hi_x.max()) - x0 + 1, int(hi_y.max()) - y0 + 1
+    ranges = np.column_stack((lo_x - x0, hi_x - x0, lo_y - y0, hi_y - y0))
+    lists = [[] for _ in range(nx * ny)]
+    for k, (ax, bx, ay, by) in enumerate(ranges.tolist()):
+        for i in range(ax, bx + 1):
+            for j in range(ay, by + 1):
+                lists[j * nx + i].append(k)
+    starts = np.cumsum([0] + [len(cell_list) for cell_list in lists])
+    items = [k for cell_list in lists for k in cell_list]
+    grid = np.concatenate(([x0, y0, nx, ny, m, um], ranges.ravel(), starts, items)).astype(np.int64)
+    return table, grid
+
+
+@njit(cache=True)
+def _in_cells(grid, x_lo, x_hi, y_lo, y_hi, found):
+    """The boxes (the grid of `with_grid`) listed in the cells the rectangle [x_lo, x_hi] × [y_lo, y_hi]
+    covers, each once (at the first of its cells in the rectangle), into `found` in the table's
+    order; returns how many."""
+    x0, y0, nx, ny, m, cell = grid[0], grid[1], grid[2], grid[3], grid[4], grid[5] / 1e6
+    if nx == 0:
+        return 0
+    i_lo = max(0, int(math.floor(x_lo / cell)) - x0)
+    i_hi = min(nx - 1, int(math.floor(x_hi / cell)) - x0)
+    j_lo = max(0, int(math.floor(y_lo / cell)) - y0)
+    j_hi = min(ny - 1, int(math.floor(y_hi / cell)) - y0)
+    ranges, starts = 6, 6 + 4 * m
+    items = starts + nx * ny + 1
+    count = 0
+    for j in range(j_lo, j_hi + 1):
+        for i in range(i_lo, i_hi + 1):
+            at = j * nx + i
+            for s in range(grid[starts + at], grid[starts + at + 1]):
+                k = grid[items + s]
+                if max(grid[ranges + 4 * k], i_lo) == i and max(grid[ranges + 4 * k + 2], j_lo) == j:
+                    found[count] = k
+                    count += 1
+    found[:count] = np.sort(found[:count])   # in the table's order, as a walk over every box finds them
+    return count
+
+
+_NO_BOXES = with_grid(np.zeros((0, 8)))   # fixed boxes: their table and grid (with_grid, _fixed_hit)

@@ -84,8 +84,8 @@ def bodies(rng, n, spread=0.5):
 
 
 def fixed_table(c, h, cos, sin):
-    """The fixed boxes as free transport's kernels take them (FreeTransport._fixed)."""
-    return np.column_stack((c, h, cos, sin))
+    """The fixed boxes as free transport's kernels take them (FreeTransport._fixed: the table and its grid)."""
+    return T.with_grid(np.column_stack((c, h, cos, sin)))
 
 
 def yawed_boxes(rng, m):
