@@ -216,3 +216,38 @@ def test_a_scratch_folder_is_swept_only_when_its_process_is_gone(tmp_path):
         sleeper.wait()
     assert sorted(removed) == sorted([made["reused"], made["dead"]])
     assert made["live"].is_dir() and (tmp_path / f"planthub-{gone.pid}-notmine1").is_file()
+
+
+FORKED_HANG = """
+import os, sys, time
+from pathlib import Path
+from types import SimpleNamespace
+from hub.logic.watchdog import WATCHDOG
+
+class Slave:                  # what the watchdog reads of an FMU slave (hub/logic/fmi.py)
+    def __init__(self, since):
+        self.busy_since, self.step_timeout, self.time, self.instance = since, 0.2, 1.0, "stuck"
+        self.interface = SimpleNamespace(path=Path("stuck.fmu"))
+
+slave = Slave
+
+calm = slave(None)
+WATCHDOG.watch(calm)          # the parent's watchdog thread runs
+pid = os.fork()
+if pid == 0:                  # a campaign's case forked from its zygote (hub/campaign/zygote.py)
+    hung = slave(time.monotonic())
+    WATCHDOG.watch(hung)
+    time.sleep(5.0)
+    os._exit(7)               # never reached when the child's own watchdog runs
+_, status = os.waitpid(pid, 0)
+print(os.waitstatus_to_exitcode(status))
+"""
+
+
+def test_a_forked_child_watches_its_own_fmus_for_hangs():
+    """The watchdog's thread is not copied by a fork: a child forked after the parent started it
+    starts its own, and a step hung in the child ends the child (exit 1), not the 5 s sleep (7)."""
+    done = subprocess.run([sys.executable, "-c", FORKED_HANG], cwd=ROOT, capture_output=True, text=True, timeout=30)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "1", done.stderr
+    assert "'stuck' (stuck.fmu)" in done.stderr and "has not returned for" in done.stderr

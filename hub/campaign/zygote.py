@@ -24,6 +24,7 @@ from __future__ import annotations
 import ctypes
 import json
 import os
+import runpy
 import select
 import signal
 import subprocess
@@ -36,10 +37,9 @@ WARM_SECONDS = 0.2   # s of the scenario the zygote runs to warm up: enough for 
 WARM_LIMIT = 60.0    # s a worker waits for its zygote to be ready before it starts its cases afresh
 FORK_LIMIT = 10.0    # s a worker waits for its zygote to fork a case
 QUIET = 2.0          # s the zygote waits after its warm-up for the run's helper threads to end
-#: threads a warm-up may leave, each with what makes a forked child start its own: the FMU watchdog
-#: (hub/logic/watchdog.py) is started once per process and would be missing in a child that
-#: believes it runs
-_RESTARTED = {"planthub-watchdog": "_reset_watchdog"}
+#: threads a warm-up may leave because a forked child starts its own: the FMU watchdog
+#: (hub/logic/watchdog.py, which registers what a child does after a fork)
+_RESTARTED = {"planthub-watchdog"}
 
 
 # ---- the worker's side ---------------------------------------------------------------------------
@@ -175,14 +175,19 @@ def _say(out: int, message: dict) -> None:
     os.write(out, json.dumps(message).encode() + b"\n")
 
 
+def _planthub(args: list[str]) -> None:
+    """`python -m hub ARGS` in this process (the command line is above the campaign: hub/README.md)."""
+    sys.argv = ["planthub", *args]
+    runpy.run_module("hub", run_name="__main__", alter_sys=True)
+
+
 def _warm(args: list[str]) -> str:
     """Run the warm-up (`planthub ARGS` with its output thrown away); '' or why the zygote must not serve."""
-    from hub.cli.main import main
     from hub.core import scratch
 
     with tempfile.TemporaryDirectory(prefix="planthub-zygote-") as folder:
         try:
-            main([*args, "--out", folder, "-q"])
+            _planthub([*args, "--out", folder, "-q"])
         except (Exception, SystemExit):   # noqa: BLE001 — a warm-up that fails only warms less: the cases judge
             pass
     sys.stdout.flush()
@@ -198,15 +203,6 @@ def _warm(args: list[str]) -> str:
 
 def _unknown_threads() -> list[str]:
     return [t.name for t in threading.enumerate() if t is not threading.main_thread() and t.name not in _RESTARTED]
-
-
-def _reset_watchdog() -> None:
-    # The watchdog's thread only sleeps and looks (its lock is taken by the main thread, which is
-    # here): the child gets a new lock and starts its own thread at its first FMU.
-    from hub.logic.watchdog import WATCHDOG
-
-    WATCHDOG._lock = threading.Lock()
-    WATCHDOG._thread = None
 
 
 def serve() -> dict | None:
@@ -244,7 +240,6 @@ def serve() -> dict | None:
                     if why:
                         return None
                     continue
-                restarts = [globals()[_RESTARTED[t.name]] for t in threading.enumerate() if t.name in _RESTARTED]
                 try:
                     pid = os.fork()
                 except OSError:
@@ -253,21 +248,19 @@ def serve() -> dict | None:
                 if pid == 0:
                     for fd in (requests, out, *children):
                         os.close(fd)
-                    _become_case(zygote, request["output"], restarts)
+                    _become_case(zygote, request["output"])
                     return request
                 children[os.pidfd_open(pid)] = pid
                 _say(out, {"id": request["id"], "pid": pid})
 
 
-def _become_case(zygote: int, output: str, restarts: list) -> None:
+def _become_case(zygote: int, output: str) -> None:
     """In the forked child: a session of its own, death with the zygote, its output to `output`."""
     os.setsid()
     ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)   # PR_SET_PDEATHSIG
     if os.getppid() != zygote:   # the zygote ended before the line above
         os._exit(1)
     signal.signal(signal.SIGINT, signal.default_int_handler)
-    for restart in restarts:
-        restart()
     written = os.open(output, os.O_WRONLY | os.O_CREAT | os.O_APPEND)
     os.dup2(written, 1)
     os.dup2(written, 2)
@@ -277,7 +270,4 @@ def _become_case(zygote: int, output: str, restarts: list) -> None:
 if __name__ == "__main__":
     case = serve()
     if case is not None:
-        from hub.cli.main import main
-
-        sys.argv = ["planthub", *case["args"]]
-        sys.exit(main(case["args"]))
+        _planthub(case["args"])

@@ -18,8 +18,9 @@ _log = logging.getLogger(__name__)
 ENDPOINTS = {"opcua": "opc.tcp://127.0.0.1:4840/planthub", "modbus": "127.0.0.1:5020", "s7": "127.0.0.1:1102",
              "enip": "127.0.0.1:44818"}
 JOIN_MARGIN = 1.0   # s of the hub's join wait left for the join itself, after the PLC set plc_ready
-EXAMPLE = ("planthub gateway opcua scenarios/bottling_plant.yaml --object control --endpoint "
-           "opc.tcp://0.0.0.0:4840/planthub \\\n      --set objects.control.python=null --connect tcp/127.0.0.1:7447")
+# The hub runs a copy of the scenario whose `control` has no `python:` line, so that it launches nothing.
+EXAMPLE = ("planthub gateway opcua COPY.yaml --object control --endpoint "
+           "opc.tcp://0.0.0.0:4840/planthub --connect tcp/127.0.0.1:7447")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

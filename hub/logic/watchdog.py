@@ -48,6 +48,13 @@ class Watchdog:
         with self._lock:
             self._handlers.pop(key, None)
 
+    def _after_fork(self) -> None:
+        """In a forked child (a campaign's case: hub/campaign/zygote.py): the parent's thread is not
+        here and its lock may have been held at the fork: a new lock, and the child's own thread
+        started at its first FMU."""
+        self._lock = threading.Lock()
+        self._thread = None
+
     def _loop(self) -> None:
         while True:
             time.sleep(POLL)
@@ -78,3 +85,4 @@ class Watchdog:
 
 
 WATCHDOG = Watchdog()
+os.register_at_fork(after_in_child=WATCHDOG._after_fork)
