@@ -1,6 +1,6 @@
 """`make bench`, the bottling plant: cost per tick with 100 bottles on the line at 150 Hz, with
-bottles in free transport (the scenario's default, hub/physics/transport.py) and moved by the
-engine all the way (`transport: engine`, the default before), the routing logic in the hub and
+bottles in free transport (the default, hub/physics/transport.py) and moved by the
+engine all the way (`transport: engine`), the routing logic in the hub and
 over Zenoh, and with bottles at rest left asleep (hub/physics/rest.py) and without; what
 letting them ride free, and leaving them asleep, changes in the deliveries; and the whole plant
 (`make run`'s 150 orders) both ways.
