@@ -416,13 +416,23 @@ class FreeTransport:
         only as a train does — they touched when they went free, at one velocity, and are no
         deeper into each other than then."""
         b, client = self.bodies, self.engine.client
-        rows = self.rows.tolist()
+        index = self.rows
+        rows = index.tolist()
         skip = floors | {b.ids[n] for n in rows} | {b.ids[n] for n in held}
         trains, slides = {}, {}
-        for n in rows:
+        halves = boxes(b.orientations[index], b.radii[index], b.half_heights[index])
+        # Every pair (n, m > n) of upright cylinders that overlap, found at once; looked at in turn below.
+        p, r, h = b.positions[index], b.radii[index], b.half_heights[index]
+        apart = p[None, :, :] - p[:, None, :]
+        depths = r[None, :] + r[:, None] - np.hypot(apart[:, :, 0], apart[:, :, 1])
+        overlap = (index[None, :] > index[:, None]) & (depths > 0.0) & \
+            (np.abs(apart[:, :, 2]) < h[None, :] + h[:, None])
+        partners = [[] for _ in rows]
+        for i, j in zip(*np.nonzero(overlap)):
+            partners[i].append(j)
+        for i, n in enumerate(rows):
             at, orientation = b.positions[n].tolist(), b.orientations[n].tolist()
-            half = boxes(b.orientations[[n]], b.radii[[n]], b.half_heights[[n]])[0]
-            lo, hi = (b.positions[n] - half).tolist(), (b.positions[n] + half).tolist()
+            lo, hi = (b.positions[n] - halves[i]).tolist(), (b.positions[n] + halves[i]).tolist()
             for other, _ in pybullet.getOverlappingObjects(lo, hi, physicsClientId=client) or ():
                 if other in skip:
                     continue
@@ -438,17 +448,15 @@ class FreeTransport:
                     raise RuntimeError(f"tick {tick}: {b.labels[n]} is in free transport but touches body {other} "
                                        f"at {tuple(round(float(c), 4) for c in touch[0][5])}")
                 slides[(n, other)] = depth if was is None else was
-            for m in rows:
-                apart = b.positions[m] - b.positions[n]
-                depth = b.radii[m] + b.radii[n] - np.hypot(apart[0], apart[1])
-                if m > n and depth > 0.0 and abs(apart[2]) < b.half_heights[m] + b.half_heights[n]:
-                    # Only a train's: at one velocity, bit for bit, touching since both went free, no deeper.
-                    was = self._trains_seen.get((n, m))
-                    one_velocity = (b.velocities[m, :2] == b.velocities[n, :2]).all()
-                    new = was is None and {n, m} <= self._checked      # free before, and not touching then
-                    if not one_velocity or new or depth > (depth if was is None else was) + 1e-9:
-                        raise RuntimeError(f"tick {tick}: free bottles {b.labels[n]} and {b.labels[m]} touch")
-                    trains[(n, m)] = depth if was is None else was
+            for j in partners[i]:
+                m, depth = rows[j], float(depths[i, j])
+                # Only a train's: at one velocity, bit for bit, touching since both went free, no deeper.
+                was = self._trains_seen.get((n, m))
+                one_velocity = (b.velocities[m, :2] == b.velocities[n, :2]).all()
+                new = was is None and {n, m} <= self._checked      # free before, and not touching then
+                if not one_velocity or new or depth > (depth if was is None else was) + 1e-9:
+                    raise RuntimeError(f"tick {tick}: free bottles {b.labels[n]} and {b.labels[m]} touch")
+                trains[(n, m)] = depth if was is None else was
         self._trains_seen, self._slides_seen, self._checked = trains, slides, set(rows)
 
     def _probe(self, n: int) -> int:
