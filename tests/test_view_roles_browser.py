@@ -17,7 +17,7 @@ import pytest
 from .helpers import ROOT
 from .view_support import command_rows, hub, two_pages, view
 
-pytestmark = pytest.mark.slow   # one paced run of 50 s of wall time, watched by two browser tabs
+pytestmark = pytest.mark.slow   # one paced run (a tenth of real time, then real time), watched by two browser tabs
 
 SCENARIO = ROOT / "scenarios" / "switch.yaml"
 EXERCISE = {"task": "Deliver both bottles, each to its lane.", "goals": [{"delivered": 2, "name": "both delivered"}]}
@@ -26,8 +26,9 @@ EXERCISE = {"task": "Deliver both bottles, each to its lane.", "goals": [{"deliv
 @pytest.fixture(scope="module")
 def pages(tmp_path_factory):
     folder = tmp_path_factory.mktemp("roles_browser")
-    # At a tenth of real time: A leaves the plant at about 4 s (40 s of wall time), after the
-    # tests before the camera's have done, however fast the machine; the run ends at 5 s (50 s).
+    # At a tenth of real time, so the plant is still there for the tests before the camera's,
+    # however slow the machine; the camera's test paces it up to real time from the panel (A
+    # leaves the plant at about 4 s, the run ends at 5 s).
     with hub(folder, SCENARIO, "--set", "run.duration=5", "--set", f"exercise={json.dumps(EXERCISE)}",
              realtime=0.1) as (started, endpoint, run_dir), \
             view(folder, "switch", endpoint, name="instructor") as (_, instructor), \
@@ -119,6 +120,9 @@ def test_the_camera_lets_go_of_a_bottle_that_leaves_the_plant_and_the_score_show
     teacher.wait_for_function("'A' in window.planthub.bodies()", timeout=60_000)
     teacher.select_option("#follow", "A")
     assert teacher.input_value("#follow") == "A"
+    teacher.fill("#pace-value", "1")   # the instructor's panel: on at real time
+    teacher.click("#pace")
+    teacher.wait_for_function("window.planthub.results.some(r => r.op === 'pace' && r.ok)", timeout=20_000)
     # A runs along the main line into main_end, whose sink takes it out of the plant.
     teacher.wait_for_function("window.planthub.lost.includes('A')", timeout=60_000)
     assert teacher.input_value("#follow") == ""
