@@ -50,7 +50,7 @@ class PhysicsWorld:
     | `parking` | parking.py | bodies out of play, off stage |
     | `robots` | arms.py, robot.py | robot arms, gripped bodies and the triggers on their tools |
     | `rest`, `sleep` | rest.py, sleep.py | bodies at rest: the rule (numpy and compiled loops) and the engine's side |
-    | `transport` | transport.py | bottles in free transport, moved by their belt's law outside the engine |
+    | `transport` | transport.py, transport_kernels.py, transport_check.py | bottles in free transport, moved by their belt's law outside the engine: the state and when it looks, the compiled tests and law, the engine's check (tests) |
     | `watch` | watch.py, placement.py | a run gone wrong: bodies too fast, non-finite or out of the box; overlaps at load |
     | `scene` | scene.py | what was built and by which object, and the moving state, for a view |
     | `changes` | changes.py | what a part changes (a belt's speed, a gate, an arm's grip…), announced once (`announce`) |

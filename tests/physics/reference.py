@@ -14,7 +14,7 @@ import numpy as np
 
 from hub.physics import fields as F
 from hub.physics.rest import BREAKING, SHAPE_MARGIN, boxes
-from hub.physics.transport import FALL, FIXED_MARGIN, LIST, SLIDE, SLIDE_INTO, SPIN, STILL, TILT
+from hub.physics.transport_kernels import FALL, FIXED_MARGIN, LIST, SLIDE, SLIDE_INTO, SPIN, STILL, TILT
 
 
 # --- fields ---------------------------------------------------------------------------------
@@ -359,7 +359,7 @@ def on_belt(fields, rows, now, times, dt, positions, velocities, pulls, ahead):
 def leave(fields, rows, dt, b, free, joined, parts, fixed):
     """transport._leave after the pulls: of `rows`, those steady, standing on a belt's surface
     (within SINK), on it 2 × their look-ahead on and touching nothing then: (go, near)."""
-    from hub.physics.transport import RISE, SINK
+    from hub.physics.transport_kernels import RISE, SINK
     p, q, v, w = b["positions"], b["orientations"], b["velocities"], b["spins"]
     riding, field = np.zeros(len(rows), bool), np.full(len(rows), -1)
     for i, n in enumerate(rows):
@@ -384,7 +384,7 @@ def leave(fields, rows, dt, b, free, joined, parts, fixed):
 
 def look(fields, tick, whole, rows, awake, dt, b, clear, free, parts, fixed):
     """transport._look after the pulls: (due, back, ok, still, near, now) and `clear` set."""
-    from hub.physics.transport import LONG
+    from hub.physics.transport_kernels import LONG
     ahead = b["ahead"]
     due = np.array([whole or clear[n] < tick + ahead[n] for n in rows], bool)
     back = np.zeros(len(rows), bool)

@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 
 from hub.physics import fields as F
 from hub.physics import rest as R
-from hub.physics import transport as T
+from hub.physics import transport_kernels as T
 from hub.physics import triggers as G
 from hub.physics import watch as W
 from hub.physics.fields import ForceFields
