@@ -57,6 +57,10 @@ class Arms:
             state.restore(arm, arm_state, f"world.robots.arms[{k}]")
         self.held = {self.arms[k]: body for k, body in saved["held"]}
 
+    def arm_bodies(self) -> set[int]:
+        """The arms' own bodies (their links collide with nothing: robot.py)."""
+        return {arm.body for arm in self.arms}
+
     def held_rows(self) -> list[int]:
         return list(self.held.values())
 

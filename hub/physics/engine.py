@@ -174,6 +174,20 @@ class Engine:
         self.set_filter(body, -1, *DYNAMIC)
         self.wake(body)
 
+    def bodies(self) -> list[int]:
+        """Every body in the engine, whoever made it."""
+        return [self.call(pybullet.getBodyUniqueId, i) for i in range(self.call(pybullet.getNumBodies))]
+
+    def shaped_boxes(self, body: int) -> list[tuple]:
+        """(centre, half extents, yaw 0) of the box the engine bounds each of a body's links by
+        that has a collision shape, as it stands now."""
+        found = []
+        for link in range(-1, self.call(pybullet.getNumJoints, body)):
+            if self.call(pybullet.getCollisionShapeData, body, link):
+                lo, hi = (np.asarray(v, float) for v in self.aabb(body, link))
+                found.append((tuple((lo + hi) / 2), tuple((hi - lo) / 2), 0.0))
+        return found
+
     def aabb(self, body: int, link: int = -1) -> tuple[tuple, tuple]:
         """The box (lo, hi) the engine bounds a body (or one of its links) by, without its pair-search widening."""
         return self.call(pybullet.getAABB, body, link)

@@ -183,6 +183,10 @@ class MovingParts:
         self.parts.append(part)
         return part
 
+    def bodies(self) -> set[int]:
+        """The parts' bodies."""
+        return {part.body for part in self.parts}
+
     def boxes(self) -> tuple[np.ndarray, np.ndarray]:
         """(centres, half extents) of the parts under way, as the wake rule widens them."""
         boxes = [part.box() for part in self.parts if part.travel is not None]

@@ -97,6 +97,10 @@ class KinematicArm:
         self.tool_velocity = np.zeros(3)
         self.set(self.q, np.zeros(JOINTS))
 
+    @property
+    def body(self) -> int:
+        return self._id
+
     def _call(self, fn, *args, **kwargs):
         return fn(*args, physicsClientId=self._client, **kwargs)
 

@@ -335,9 +335,14 @@ class PhysicsWorld:
 
     def _fixed_boxes(self) -> list[tuple]:
         """Every fixed box but the floors, and every box of a gate or blade whether solid or not:
-        what a free bottle keeps clear of (transport.py)."""
-        floors = self.engine.floors
-        return [(c, h, y) for body, c, h, y in self.engine.static if body not in floors] + self.parts.boxes
+        what a free bottle keeps clear of (transport.py). And the bounding box of every shaped
+        link of a body none of the world's parts declared (made by a primitive that tells free
+        transport nothing about it): a bottle near it stays in the engine."""
+        engine, floors = self.engine, self.engine.floors
+        declared = (engine.fixed_bodies() | self.parts.bodies() | self.moving.bodies() | self.robots.arm_bodies()
+                    | set(self.bodies.ids))
+        unknown = [box for body in engine.bodies() if body not in declared for box in engine.shaped_boxes(body)]
+        return [(c, h, y) for body, c, h, y in engine.static if body not in floors] + self.parts.boxes + unknown
 
     def _arm_spheres(self) -> list[tuple]:
         """Where each robot arm can reach (centre, radius): where it may put a bottle down."""

@@ -423,3 +423,22 @@ def test_a_fast_free_bottle_comes_back_before_a_thin_closed_gate_across_its_belt
         t = world.transport
         assert t.entered == 1 and t.left == 1 and not t.free[bottle]     # rode free, came back, held at the gate
         assert world.positions[bottle, 0] == pytest.approx(1.5 - 0.0025 - 0.03, abs=0.001)
+
+
+def test_a_body_no_part_declared_keeps_a_free_bottle_coming_near_it_in_the_engine():
+    """A body made in the engine by a primitive that tells free transport nothing (here, boxes made
+    straight in the engine across the belt, 1 m ahead) is kept clear of as a fixed box is, by its
+    bounding box: the bottle rides free up to it, comes back into the engine before it and stops
+    there against it; never touches it while free (the engine asked at every tick)."""
+    with PhysicsWorld(150) as world:
+        world.check_free = True
+        plain_belt(world)
+        row = world.add_bottle((0.2, 0, 0), 0.03, 0.1, 0.05, "b", transport="free")
+        wall = world.engine.boxes_body([(1.2, 0.0, 0.05)], [(0.01, 0.1, 0.05)], [0.0])
+        assert wall not in world.engine.fixed_bodies()    # declared by no part of the world
+        world.step(150)
+        assert world.transport.free[row]               # free on the open belt
+        world.step(450)                                # check_free: touching the wall while free is an error
+        assert not world.transport.free[row] and world.transport.left >= 1
+        face = 1.2 - 0.01 - 0.03
+        assert face - 0.005 < world.positions[row, 0] < face + 0.001   # stopped by it, in the engine
