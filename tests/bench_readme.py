@@ -19,7 +19,7 @@ COST_TITLES = {
     "event_latency": "Event latency", "plant_elements": "Plant elements", "flush": "The recorder's flush",
     "lockstep": "Lockstep over Zenoh", "data_plane": "The data plane", "watched_plant": "The plant watched",
     "bottling_plant": "The bottling plant", "gateway": "Gateways", "campaign": "Campaigns",
-    "checkpoints": "Checkpoints", "petri": "Petri nets", "view": "The view",
+    "checkpoints": "Checkpoints", "petri": "Petri nets", "view": "The view", "scale": "Scale",
 }
 
 
