@@ -34,9 +34,9 @@ def engine_check(transport, tick: int, floors: set[int], fixed: set[int] = froze
     rows = index.tolist()
     skip = floors | {b.ids[n] for n in rows} | {b.ids[n] for n in held}
     trains, slides = {}, {}
-    halves = boxes(b.orientations[index], b.radii[index], b.half_heights[index])
-    # Every pair (n, m > n) of upright cylinders that overlap, found at once; looked at in turn below.
     p, r, h = b.positions[index], b.radii[index], b.half_heights[index]
+    halves = boxes(b.orientations[index], r, h)
+    # Every pair (n, m > n) of upright cylinders that overlap, found at once; looked at in turn below.
     apart = p[None, :, :] - p[:, None, :]
     depths = r[None, :] + r[:, None] - np.hypot(apart[:, :, 0], apart[:, :, 1])
     overlap = (index[None, :] > index[:, None]) & (depths > 0.0) & \
@@ -72,6 +72,7 @@ def engine_check(transport, tick: int, floors: set[int], fixed: set[int] = froze
                 raise RuntimeError(f"tick {tick}: free bottles {b.labels[n]} and {b.labels[m]} touch")
             trains[(n, m)] = depth if was is None else was
     transport._trains_seen, transport._slides_seen, transport._checked = trains, slides, set(rows)
+
 
 def _probe(transport, n: int) -> int:
     """A collision shape standing for bottle `n` in `check` (made once, outside the world)."""
