@@ -21,9 +21,11 @@ run: $(STAMP) fmus view-assets $(WARM)
 
 # The lint (ruff, pyproject.toml's [tool.ruff]) and the suite on every core (pytest-xdist: each test
 # file whole on one worker), ending with its slowest tests. `-m "not slow"` leaves out the plant runs.
+# Bytecode is written (into __pycache__, ignored by git) even where PYTHONDONTWRITEBYTECODE is set: the
+# suite starts a Python process for every command it tries, and each would compile the hub's sources again.
 test: $(STAMP) fmus view-assets chromium $(WARM)
 	$(PY) -m ruff check --quiet hub modules tests fmus
-	$(PY) -m pytest -n auto --dist loadfile --durations=15
+	env -u PYTHONDONTWRITEBYTECODE $(PY) -m pytest -n auto --dist loadfile --durations=15
 
 # The physics tick's compiled loops (numba, cached beside their sources in __pycache__) compiled
 # once at set-up, so that a fresh clone's first run is as fast as its second: 20 s of the bottling

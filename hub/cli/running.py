@@ -96,7 +96,7 @@ def test_command(args) -> int:
     bus, pacer = _bus(args, scenario), _pacer(args, scenario)
     verdicts = _Verdicts(args, scenario)
     try:
-        with Simulation(args.scenario, overrides(args), out=args.out, bus=bus, replay=args.replay,
+        with Simulation(scenario, out=args.out, bus=bus, replay=args.replay,
                         pacer=pacer, signals=True, on_emergency=verdicts.emergency, every_source=False,
                         **_checkpointing(args, scenario)) as sim:
             sim.run()

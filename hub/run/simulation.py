@@ -13,6 +13,7 @@ from hub.run.master import RunResult
 from hub.run.summary import RunSummary
 from hub.scenario.checker import load_scenario
 from hub.scenario.expectations import NoJam, Outcome, interrupted
+from hub.scenario.model import Scenario
 
 
 class Simulation:
@@ -23,8 +24,9 @@ class Simulation:
             assert sim["main_end.count.total"] == 0
             assert all(outcome.passed for outcome in sim.check())
 
-    `overrides` take dotted keys as `--set` does; `logic` maps an object to a replacement FMU for
-    its state logic. Every source slot is computed (not only the ones flows, the recording and
+    `scenario` is a file, or a Scenario loaded already with its overrides (`planthub test` loads it
+    first, to write a JUnit file for a scenario that does not load). `overrides` take dotted keys
+    as `--set` does; `logic` maps an object to a replacement FMU for its state logic. Every source slot is computed (not only the ones flows, the recording and
     the expectations read), so any slot can be read at any point; `every_source=False` computes
     only those (`planthub test`: every bottle's pose at every point is a third of a plant's run). `out` writes recording.csv and events.csv, and
     summary.json when the simulation is closed. `summary()` gives the run summary at any point:
@@ -40,7 +42,12 @@ class Simulation:
         changes = dict(overrides or {})
         for name, file in (logic or {}).items():
             changes[f"objects.{name}.logic"] = {"file": str(Path(file).resolve())}
-        self.scenario = load_scenario(scenario, changes)
+        if isinstance(scenario, Scenario):
+            if changes:
+                raise TypeError("overrides and logic go with a scenario's file: this Scenario is loaded already")
+            self.scenario = scenario
+        else:
+            self.scenario = load_scenario(scenario, changes)
         self.out = out
         self.events: list[tuple[float, str, str]] = []   # the event log: (time, slot, detail)
         self._run = Run(self.scenario, out=out, every_source=every_source, observers=[_EventLog(self)], **run_options)
