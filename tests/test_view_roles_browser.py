@@ -15,7 +15,7 @@ import json
 import pytest
 
 from .helpers import ROOT
-from .view_support import command_rows, hub, two_pages, view
+from .view_support import command_rows, hub, two_pages, views
 
 pytestmark = pytest.mark.slow   # one paced run (a tenth of real time, then real time), watched by two browser tabs
 
@@ -31,9 +31,8 @@ def pages(tmp_path_factory):
     # leaves the plant at about 4 s, the run ends at 5 s).
     with hub(folder, SCENARIO, "--set", "run.duration=5", "--set", f"exercise={json.dumps(EXERCISE)}",
              realtime=0.1) as (started, endpoint, run_dir), \
-            view(folder, "switch", endpoint, name="instructor") as (_, instructor), \
-            view(folder, "switch", endpoint, "--role", "trainee", name="trainee") as (_, trainee), \
-            two_pages(instructor, trainee) as ((teacher, pupil), errors):
+            views(folder, "switch", endpoint, ("instructor", ()), ("trainee", ("--role", "trainee"))) as urls, \
+            two_pages(*urls) as ((teacher, pupil), errors):
         yield teacher, pupil, run_dir, errors
 
 
@@ -50,14 +49,14 @@ def test_the_instructor_injects_a_fault_from_the_panel_and_the_trainee_sees_none
         teacher.evaluate("window.planthub.faults.kinds.belt_failure.targets")
     teacher.select_option("#fault-target", "sw.main")
     teacher.fill('#fault-params [data-param="speed"]', "0.5")
-    teacher.fill("#fault-for", "0.5")
+    teacher.fill("#fault-for", "0.2")
     teacher.click("#fault-inject")
     teacher.wait_for_function("window.planthub.results.some(r => r.op === 'fault' && r.ok)", timeout=20_000)
     rows = command_rows(run_dir, 20, lambda rows: any(r["op"] == "repair" for r in rows))
     assert [(r["op"], r["slot"], r["by"]) for r in rows] == [("fault", "sw.main", "instructor"),
                                                             ("repair", "sw.main", "instructor")]
     assert json.loads(rows[0]["value"]) == {"name": "live 1: belt_failure sw.main", "kind": "belt_failure",
-                                            "speed": 0.5, "for": 0.5}
+                                            "speed": 0.5, "for": 0.2}
     teacher.wait_for_function("window.planthub.events.some(r => r[1] === '@fault')", timeout=20_000)
 
     # A target the hub does not know (put into the list by hand): its refusal is said on the page.

@@ -76,6 +76,16 @@ def view(folder: Path, run: str, endpoint: str, *args, name: str = "view-test", 
         yield started, wait_for_url(started, timeout)
 
 
+@contextlib.contextmanager
+def views(folder: Path, run: str, endpoint: str, *pages: tuple[str, tuple], timeout: float = 60.0):
+    """Several `planthub view RUN` of one run, each (name, its own args), started side by side and
+    waited for together; yields their urls in that order."""
+    with contextlib.ExitStack() as stack:
+        started = [stack.enter_context(planthub(folder, name, "view", run, "--connect", endpoint, "--port", 0,
+                                                "--name", name, *args)) for name, args in pages]
+        yield [wait_for_url(s, timeout) for s in started]
+
+
 def record(folder: Path, scenario: Path, *args, timeout: float = 120.0) -> Path:
     """A recorded run: `planthub run SCENARIO --record-bodies --out FOLDER/recorded ARGS…`; its folder."""
     out = folder / "recorded"
