@@ -67,6 +67,9 @@ from hub.physics.transport_kernels import (
     _NO_BOXES,
     _NO_PARTS,
     NEAR,
+    Body,
+    Fixed,
+    Way,
     _advance,
     _grow,
     _leave,
@@ -161,10 +164,22 @@ class FreeTransport:
     def _trains(self, seeds: np.ndarray, pool: np.ndarray) -> np.ndarray:
         """`seeds` (a mask over bodies) grown by the bodies of `pool` (rows) whose footprints
         come within 2·SHAPE_MARGIN of one it holds, until it holds the whole train of each."""
-        b = self.bodies
         out = seeds.copy()
-        _grow(out, np.asarray(pool, np.int64), b.positions, b.radii, b.half_heights)
+        _grow(out, np.asarray(pool, np.int64), self._body())
         return out
+
+    def _body(self, positions: np.ndarray | None = None) -> Body:
+        """The bodies' state as the kernels take it (`positions`: in place of the bodies' own)."""
+        b = self.bodies
+        return Body(b.positions if positions is None else positions, b.orientations, b.velocities,
+                    b.angular_velocities, b.masses, b.radii, b.half_heights)
+
+    def _way(self) -> Way:
+        return Way(self.ahead, self.most, self.pulls)
+
+    def _lists(self) -> Fixed:
+        """The fixed boxes and each bottle's list of those near it, as the kernels take them."""
+        return Fixed(*self._fixed, self.listed_at, self.near, self.near_count)
 
     def _part_boxes(self) -> np.ndarray:
         """The moving parts' boxes as the wake rule widens them for one tick, one a row: centre,
@@ -213,10 +228,8 @@ class FreeTransport:
         # One compiled call for the whole look (`_look`): its tests' arrays cross into it once.
         due, back, ok, still, near, now = _look(
             tick, whole, rows, b.in_play_rows() if b.moved_rows is None else b.moved_rows,
-            np.asarray(awake, np.int64), b.in_play_rows(), self.dt, positions, b.orientations, b.velocities,
-            b.angular_velocities, b.masses, b.radii, b.half_heights, self.ahead, self.most, self.pulls, self.clear,
-            self.free, fields.table(), fields.explicit, self._part_boxes(), self.listed_at, self.near, self.near_count,
-            self._fixed)
+            np.asarray(awake, np.int64), b.in_play_rows(), self.dt, self._body(positions), self._way(), self.clear,
+            self.free, fields.explicit, fields.table(), self._part_boxes(), self._lists())
         settle = None
         if due.any():
             look = rows[due]
@@ -366,10 +379,8 @@ class FreeTransport:
         first, for `pulled` (`_pulls`). One compiled call (`_leave`)."""
         b, fields = self.bodies, self.fields
         go, near = _leave(np.asarray(rows, np.int64), np.asarray(pulled, np.int64), b.in_play_rows(), self.dt,
-                          b.positions, b.orientations, b.velocities, b.angular_velocities, b.masses, b.radii,
-                          b.half_heights, self.ahead, self.most, self.pulls, self.free, joined, fields.table(),
-                          fields.explicit, self._part_boxes(), self.listed_at, self.near, self.near_count,
-                          self._fixed)
+                          self._body(), self._way(), self.free, joined, fields.explicit, fields.table(),
+                          self._part_boxes(), self._lists())
         return rows[go], rows[near]
 
     # --- the tick itself --------------------------------------------------------------------

@@ -2,13 +2,16 @@
 back, and the belt's law it follows while free (transport.py says what they decide and when).
 
 Each is plain Python that numba compiles (`cache=True`: make warm compiles them once); each takes
-the bodies' and the fields' arrays as they are, never a Python object, and tests/physics/
-test_kernels.py holds each to a plain numpy reference on random scenes, and runs the physics
-tests once more with the JIT off. The laws and limits below are what the tests decide by.
+a few packed tables — the bodies' state (Body), each body's look (Way), the fixed boxes with each
+body's list of them (Fixed), the fields' table (ForceFields.table) — named tuples of the arrays
+as they are, never a Python object; tests/physics/test_kernels.py holds each to a plain numpy
+reference on random scenes, and runs the physics tests once more with the JIT off. The laws and
+limits below are what the tests decide by.
 """
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit
@@ -31,13 +34,21 @@ NEAR = 32             # boxes a bottle's list holds; one with more within LIST s
 CELL = 0.25           # m: the side of a cell of the fixed boxes' grid (`with_grid`), at least
 CELLS = 1 << 20       # cells the grid has at most: a larger floor gets larger cells
 
+#: every body's state, a row each (hub/physics/bodies.py's arrays; spins: angular velocities)
+Body = namedtuple("Body", "positions orientations velocities spins masses radii half_heights")
+#: every body's look: its look-ahead in ticks, the most it may be pulled over a look, its pull now
+#: (FreeTransport's ahead, most, pulls; `_pulls` writes the last two)
+Way = namedtuple("Way", "ahead most pulls")
+#: the fixed boxes as `with_grid` makes them (their table and grid) and each body's list of those
+#: near it: where it was listed, the first NEAR of them and how many (`_relist` writes these)
+Fixed = namedtuple("Fixed", "boxes grid listed_at near near_count")
+
 
 @njit(cache=True)
-def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at, near, near_count,
-               table, boxes):
+def _fixed_hit(rows, times, dt, body, way, table, fixed):
     """(len(rows),): whether each of `rows`, headed on for `times` × its look-ahead (n ticks),
-    could reach a fixed box (`boxes`, FreeTransport._fixed: the table of centre, half extents,
-    cos and sin of the yaw, one a row, and its grid: `with_grid`).
+    could reach a fixed box (`fixed`: the table of centre, half extents, cos and sin of the yaw,
+    one a row, its grid (`with_grid`) and the bodies' lists of them).
 
     Its way: n ticks at its velocity v, plus what the belt's pull adds — a pull that does
     not grow (the relaxing law, or friction's constant cap; a belt's speed change looks
@@ -63,15 +74,17 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
 
     Row by row and, for each, box by box of its list (listed again first where it is stale), or
     of the grid's cells its way can reach."""
-    fixed, grid = boxes
-    c, h, cos, sin = fixed[:, 0:3], fixed[:, 3:6], fixed[:, 6], fixed[:, 7]
+    positions, velocities, radii, half_heights = body.positions, body.velocities, body.radii, body.half_heights
+    ahead, pulls = way.ahead, way.pulls
+    boxes, grid, listed_at, near, near_count = fixed
+    c, h, cos, sin = boxes[:, 0:3], boxes[:, 3:6], boxes[:, 6], boxes[:, 7]
     found = np.empty(c.shape[0], np.int64)
     hit = np.zeros(rows.shape[0], np.bool_)
     for i in range(rows.shape[0]):
         n_ = rows[i]
         if (math.hypot(positions[n_, 0] - listed_at[n_, 0], positions[n_, 1] - listed_at[n_, 1]) > LIST / 2.0
                 or abs(positions[n_, 2] - listed_at[n_, 2]) > LIST / 2.0):
-            _relist(n_, positions, radii, half_heights, listed_at, near, near_count, boxes)
+            _relist(n_, body, fixed)
         if near_count[n_] > near.shape[1]:
             hit[i] = True
             continue
@@ -91,7 +104,7 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
         gx, gy = ux * along, uy * along
         widen = across + FIXED_MARGIN
         px, py = positions[n_, 0], positions[n_, 1]
-        straight = _belt(n_, n, dt, positions, velocities, pulls, table) >= 0
+        straight = _belt(n_, n, dt, body, way, table) >= 0
         # The list holds every box its way can reach only while the way, widened, stays within
         # LIST/2 of where it is (it is within LIST/2 of where it was listed): a longer way (a fast
         # bottle over a long look) is tested against every box of the grid's cells it can reach,
@@ -124,12 +137,13 @@ def _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half
 
 
 @njit(cache=True)
-def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, table):
+def _on_belt(rows, now, times, dt, body, way, table):
     """(ok, still, stays), each (len(rows),): riding a belt now (`now`: the field under each)
     and, `times` × its look-ahead on, one at the same height, not coming to a stop on a still
     belt (ok); on a belt, coming to a stop on a still one (still); on the same belt all the
     way, at its velocity and with the belt's pull (stays: its law, and so its pull, does not
     change on the way — one crossing onto a slower belt is pulled harder there)."""
+    positions, velocities, ahead, pulls = body.positions, body.velocities, way.ahead, way.pulls
     count = rows.shape[0]
     ok, still, stays = np.zeros(count, np.bool_), np.zeros(count, np.bool_), np.zeros(count, np.bool_)
     for i in range(count):
@@ -152,13 +166,15 @@ def _on_belt(rows, now, times, dt, positions, velocities, pulls, ahead, table):
 
 
 @njit(cache=True)
-def _pulls(rows, positions, velocities, masses, ahead, dt, explicit, pulls, most, table):
+def _pulls(rows, dt, explicit, body, way, table):
     """The pull each moving body of `rows` gets from the belt under it at its velocity now
     (`pulls`: what the next tick applies), in place of the last tick's, which is stale once a
     bottle crossed onto another belt; and `most`, the most it may be pulled over a look (one,
     two or LONG look-aheads forward): the larger of now and the law where its way ends, which
     may be another belt's. Bodies not in `rows` (resting, parked) are not pulled: the caller
     (`_look`, `_leave`) zeroes `most` first."""
+    positions, velocities, masses = body.positions, body.velocities, body.masses
+    ahead, most, pulls = way
     for n in rows:
         x, y, z = positions[n, 0], positions[n, 1], positions[n, 2]
         vx, vy = velocities[n, 0], velocities[n, 1]
@@ -199,12 +215,13 @@ def _advance(rows, positions, orientations, velocities, masses, offsets, dt, exp
 
 
 @njit(cache=True)
-def _relist(n, positions, radii, half_heights, listed_at, near, near_count, boxes):
+def _relist(n, body, fixed):
     """Body `n`'s list: the fixed boxes (`_fixed_hit`) its upright footprint is within LIST of,
     horizontally and in height, the first NEAR of them, and how many there are: of the boxes in
     the grid's cells within LIST of its footprint."""
-    fixed, grid = boxes
-    c, h, cos, sin = fixed[:, 0:3], fixed[:, 3:6], fixed[:, 6], fixed[:, 7]
+    positions, radii, half_heights = body.positions, body.radii, body.half_heights
+    boxes, grid, listed_at, near, near_count = fixed
+    c, h, cos, sin = boxes[:, 0:3], boxes[:, 3:6], boxes[:, 6], boxes[:, 7]
     reach = radii[n] + LIST
     px, py = positions[n, 0], positions[n, 1]
     found = np.empty(c.shape[0], np.int64)
@@ -276,8 +293,7 @@ def _box_distance(x, y, hx, hy):
 
 
 @njit(cache=True)
-def _touching(rows, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most,
-              pulls, free, joined, against, table, part_centres, part_extents):
+def _touching(rows, play, times, dt, body, way, free, joined, against, table, part_centres, part_extents):
     """(len(rows),): whether each of `rows` could touch another body in play (or of `among`)
     or a moving part within `times` × its look-ahead. Their bounds first (rest.bound; pairs
     found by a sweep along the plant's longer axis when there are many), then for each pair
@@ -305,6 +321,8 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
     boxes (part_centres, part_extents). Pairs by their bounds (rest.bound), found along the
     plant's longer axis from each row outwards. Only `rows` and the bodies of `against` are
     bounded and sorted."""
+    positions, orientations, velocities, spins = body.positions, body.orientations, body.velocities, body.spins
+    radii, half_heights, ahead = body.radii, body.half_heights, way.ahead
     farthest = 0.0
     for q in range(play.shape[0]):
         farthest = max(farthest, ahead[play[q]] * times)
@@ -372,18 +390,18 @@ def _touching(rows, play, times, dt, positions, orientations, velocities, spins,
                 if (abs(positions[na, 0] - positions[no, 0]) >= reach or abs(positions[na, 1] - positions[no, 1]) >= reach
                         or abs(positions[na, 2] - positions[no, 2]) >= reach):
                     continue      # their bounds do not meet
-                if _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights,
-                         ahead, most, pulls, belt, farthest, table, reaches, steady, joined):
+                if _pair(a, o, play, times, dt, body, way, belt, farthest, table, reaches, steady, joined):
                     touching[i] = True
     return touching
 
 
 @njit(cache=True)
-def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most, pulls,
-          belt, farthest, table, reaches, steady, joined):
+def _pair(a, o, play, times, dt, body, way, belt, farthest, table, reaches, steady, joined):
     """Whether bodies play[a] and play[o] could touch within the look (`_touching`);
     not when they are a train: both joined, on one straight belt whose law scales with the mass
     and staying on it, at the same velocity and not turning — the law moves them alike."""
+    positions, orientations, velocities, spins = body.positions, body.orientations, body.velocities, body.spins
+    radii, half_heights, ahead, most = body.radii, body.half_heights, way.ahead, way.most
     na, no = play[a], play[o]       # their bounds meet (the caller tested them)
     if steady[a] and steady[o]:
         n = max(ahead[na], ahead[no]) * times
@@ -396,16 +414,16 @@ def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, rad
             return False
         closing = math.hypot(velocities[na, 0] - velocities[no, 0], velocities[na, 1] - velocities[no, 1])
         rock = turning(radii[na], half_heights[na], spins[na]) + turning(radii[no], half_heights[no], spins[no])
-        way = (closing + rock) * n * dt
+        travel = (closing + rock) * n * dt
         for q in (a, o):
             if belt[q] == -2:
-                belt[q] = _belt(play[q], farthest, dt, positions, velocities, pulls, table)
+                belt[q] = _belt(play[q], farthest, dt, body, way, table)
         one_belt = belt[a] >= 0 and belt[a] == belt[o]
         if not one_belt:
-            way += (most[na] + most[no]) * n * (n + 1.0) / 2.0 * dt   # the most each may be pulled (_pulls)
-        if math.hypot(ax, ay) - radii[na] - radii[no] - 2.0 * SHAPE_MARGIN >= way:
+            travel += (most[na] + most[no]) * n * (n + 1.0) / 2.0 * dt   # the most each may be pulled (_pulls)
+        if math.hypot(ax, ay) - radii[na] - radii[no] - 2.0 * SHAPE_MARGIN >= travel:
             return False
-        return not (one_belt and way == 0.0 and joined[na] and joined[no])
+        return not (one_belt and travel == 0.0 and joined[na] and joined[no])
     ka, ko = ahead[na] * times, ahead[no] * times
     for c in range(3):
         # The wake rule's boxes without the contact breaking threshold (a free bottle is in no island
@@ -420,9 +438,10 @@ def _pair(a, o, play, times, dt, positions, orientations, velocities, spins, rad
 
 
 @njit(cache=True)
-def _belt(n, m, dt, positions, velocities, pulls, table):
+def _belt(n, m, dt, body, way, table):
     """The straight belt with a mass-scaled law body `n` stands on and stays on for `m` ticks at
     its velocity and pull, or −1."""
+    positions, velocities, pulls = body.positions, body.velocities, way.pulls
     x, y, z = positions[n, 0], positions[n, 1], positions[n, 2]
     now = field_at(x, y, z, table)
     if now < 0 or table[now, STRAIGHT] == 0.0:
@@ -439,9 +458,10 @@ def _belt(n, m, dt, positions, velocities, pulls, table):
 
 
 @njit(cache=True)
-def _grow(out, pool, positions, radii, half_heights):
+def _grow(out, pool, body):
     """FreeTransport._trains: `out` grown in place by the bodies of `pool` within 2·SHAPE_MARGIN
     of one it holds (upright footprints, overlapping in height), theirs in turn."""
+    positions, radii, half_heights = body.positions, body.radii, body.half_heights
     stack = [n for n in pool if out[n]]
     while stack:
         n = stack.pop()
@@ -463,8 +483,7 @@ def _grown(extents, growth, ahead, rows, times, dt):
 
 
 @njit(cache=True)
-def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, velocities, spins, masses, radii,
-          half_heights, ahead, most, pulls, clear, free, table, explicit, parts, listed_at, near_list, near_count, boxes):
+def _look(tick, whole, rows, pulled, awake, play, dt, body, way, clear, free, explicit, table, parts, fixed):
     """FreeTransport.release_near's look at the free `rows`, in one call: every pull taken afresh
     (`_pulls`, for `pulled`); the rows not due for a whole look against the bodies `awake` in
     the engine; those due (all when `whole`) LONG look-aheads forward, and what that finds near
@@ -472,10 +491,11 @@ def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, v
     the tick their look holds to. Returns (due, back, ok, still, near, now): per row whether it
     was due and whether the look against the awake bodies found it near; per row due, riding on
     (ok), coming to a stop on a still belt (still), near something (near), and its field now.
-    `table`: ForceFields.table; `parts`: FreeTransport._part_boxes; `boxes`: the fixed boxes (`_fixed_hit`)."""
-    most[:] = 0.0
+    `table`: ForceFields.table; `parts`: FreeTransport._part_boxes; `fixed`: the fixed boxes (`_fixed_hit`)."""
+    positions, ahead = body.positions, way.ahead
+    way.most[:] = 0.0
     if pulled.shape[0]:
-        _pulls(pulled, positions, velocities, masses, ahead, dt, explicit, pulls, most, table)
+        _pulls(pulled, dt, explicit, body, way, table)
     count = rows.shape[0]
     due = np.empty(count, np.bool_)
     for i in range(count):
@@ -485,8 +505,7 @@ def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, v
     if others.shape[0] and awake.shape[0]:
         against = np.zeros(free.shape[0], np.bool_)
         against[awake] = True
-        found = _touching(others, play, 1.0, dt, positions, orientations, velocities, spins, radii, half_heights,
-                          ahead, most, pulls, free, free, against, table, parts[:, 0:3],
+        found = _touching(others, play, 1.0, dt, body, way, free, free, against, table, parts[:, 0:3],
                           _grown(parts[:, 3:6], parts[:, 6:9], ahead, others, 1.0, dt))
         k = 0
         for i in range(count):
@@ -504,17 +523,15 @@ def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, v
         now[i] = field_at(positions[n, 0], positions[n, 1], positions[n, 2], table)
     everyone = np.ones(free.shape[0], np.bool_)
     # LONG look-aheads forward first, then what that finds near, or off its belt, one forward.
-    ok, still, stays = _on_belt(look, now, float(LONG), dt, positions, velocities, pulls, ahead, table)
-    near = _near(look, float(LONG), play, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
-                 most, pulls, free, everyone, table, parts, listed_at, near_list, near_count, boxes)
+    ok, still, stays = _on_belt(look, now, float(LONG), dt, body, way, table)
+    near = _near(look, float(LONG), play, dt, body, way, free, everyone, table, parts, fixed)
     for i in range(m):
         clear[look[i]] = tick + LONG * ahead[look[i]]
     short = np.flatnonzero(~ok | ~stays | near)
     if short.shape[0]:
         these = look[short]
-        ok1, still1, _ = _on_belt(these, now[short], 1.0, dt, positions, velocities, pulls, ahead, table)
-        near1 = _near(these, 1.0, play, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
-                      most, pulls, free, everyone, table, parts, listed_at, near_list, near_count, boxes)
+        ok1, still1, _ = _on_belt(these, now[short], 1.0, dt, body, way, table)
+        near1 = _near(these, 1.0, play, dt, body, way, free, everyone, table, parts, fixed)
         for j in range(short.shape[0]):
             i = short[j]
             ok[i], still[i], near[i] = ok1[j], still1[j], near1[j]
@@ -523,29 +540,27 @@ def _look(tick, whole, rows, pulled, awake, play, dt, positions, orientations, v
 
 
 @njit(cache=True)
-def _near(rows, times, play, dt, positions, orientations, velocities, spins, radii, half_heights, ahead, most, pulls,
-          free, against, table, parts, listed_at, near_list, near_count, boxes):
+def _near(rows, times, play, dt, body, way, free, against, table, parts, fixed):
     """`_touching` or `_fixed_hit`, for `_look`."""
-    near = _touching(rows, play, times, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
-                     most, pulls, free, free, against, table, parts[:, 0:3],
-                     _grown(parts[:, 3:6], parts[:, 6:9], ahead, rows, times, dt))
-    if boxes[0].shape[0]:
-        near = near | _fixed_hit(rows, times, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at,
-                                 near_list, near_count, table, boxes)
+    near = _touching(rows, play, times, dt, body, way, free, free, against, table, parts[:, 0:3],
+                     _grown(parts[:, 3:6], parts[:, 6:9], way.ahead, rows, times, dt))
+    if fixed.boxes.shape[0]:
+        near = near | _fixed_hit(rows, times, dt, body, way, table, fixed)
     return near
 
 
 @njit(cache=True)
-def _leave(rows, pulled, play, dt, positions, orientations, velocities, spins, masses, radii, half_heights, ahead,
-           most, pulls, free, joined, table, explicit, parts, listed_at, near_list, near_count, boxes):
+def _leave(rows, pulled, play, dt, body, way, free, joined, explicit, table, parts, fixed):
     """FreeTransport._leaving in one call: every pull afresh (`_pulls`, for `pulled`), then of
     `rows` those steady (upright, tilt under TILT, spin under SPIN, vertical speed under RISE, or
     free) with their base on a belt's surface, on it 2 ×
     their look-ahead forward (`_on_belt`), and touching nothing then (`_touching`, `_fixed_hit`):
     masks over `rows` of those that go and those near something."""
-    most[:] = 0.0
+    positions, orientations, velocities = body.positions, body.orientations, body.velocities
+    spins, half_heights, ahead = body.spins, body.half_heights, way.ahead
+    way.most[:] = 0.0
     if pulled.shape[0]:
-        _pulls(pulled, positions, velocities, masses, ahead, dt, explicit, pulls, most, table)
+        _pulls(pulled, dt, explicit, body, way, table)
     count = rows.shape[0]
     tilt = math.cos(TILT)
     riding = np.zeros(count, np.bool_)
@@ -560,18 +575,16 @@ def _leave(rows, pulled, play, dt, positions, orientations, velocities, spins, m
         if k >= 0 and abs(positions[n, 2] - half_heights[n] - table[k, HEIGHT]) < SINK:
             riding[i], field[i] = True, k
     these = rows[riding]
-    ok = _on_belt(these, field[riding], 2.0, dt, positions, velocities, pulls, ahead, table)[0]
+    ok = _on_belt(these, field[riding], 2.0, dt, body, way, table)[0]
     go, near = np.zeros(count, np.bool_), np.zeros(count, np.bool_)
     these = these[ok]
     if these.shape[0] == 0:
         return go, near
-    close = _touching(these, play, 2.0, dt, positions, orientations, velocities, spins, radii, half_heights, ahead,
-                      most, pulls, free, joined, np.ones(free.shape[0], np.bool_), table, parts[:, 0:3],
-                      _grown(parts[:, 3:6], parts[:, 6:9], ahead, these, 2.0, dt))
-    if boxes[0].shape[0] and not close.all():
+    close = _touching(these, play, 2.0, dt, body, way, free, joined, np.ones(free.shape[0], np.bool_), table,
+                      parts[:, 0:3], _grown(parts[:, 3:6], parts[:, 6:9], ahead, these, 2.0, dt))
+    if fixed.boxes.shape[0] and not close.all():
         rest = these[~close]
-        hit = _fixed_hit(rest, 2.0, dt, positions, velocities, pulls, ahead, radii, half_heights, listed_at, near_list,
-                         near_count, table, boxes)
+        hit = _fixed_hit(rest, 2.0, dt, body, way, table, fixed)
         k = 0
         for j in range(close.shape[0]):
             if not close[j]:
@@ -587,7 +600,7 @@ _NO_PARTS = np.zeros((0, 9))   # moving parts' boxes: centre, half extents, grow
 
 
 def with_grid(table: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The fixed boxes as `_fixed_hit` and `_relist` take them: `table` (centre, half extents, cos
+    """The fixed boxes as Fixed holds them: `table` (centre, half extents, cos
     and sin of the yaw, a row each) and a grid over the floor of square cells (CELL, or larger
     where the floor would have more than CELLS), each cell listing the boxes whose bounding
     rectangle covers it, so that a bottle's tests look at the boxes near it, not at all of a
@@ -646,4 +659,4 @@ def _in_cells(grid, x_lo, x_hi, y_lo, y_hi, found):
     return count
 
 
-_NO_BOXES = with_grid(np.zeros((0, 8)))   # fixed boxes: their table and grid (with_grid, _fixed_hit)
+_NO_BOXES = with_grid(np.zeros((0, 8)))   # fixed boxes: their table and grid (with_grid, Fixed)

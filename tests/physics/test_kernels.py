@@ -83,6 +83,17 @@ def bodies(rng, n, spread=0.5):
                 masses=rng.uniform(0.02, 0.5, n), ahead=rng.integers(2, 9, n).astype(float))
 
 
+def body(b, positions=None):
+    """The bodies of `bodies` as the kernels take them (`positions`: in place of theirs)."""
+    return T.Body(b["positions"] if positions is None else positions, b["orientations"], b["velocities"], b["spins"],
+                  b["masses"], b["radii"], b["half_heights"])
+
+
+def way(ahead, pulls, most=None):
+    """Each body's look as the kernels take it."""
+    return T.Way(ahead, np.zeros(len(ahead)) if most is None else most, pulls)
+
+
 def fixed_table(c, h, cos, sin):
     """The fixed boxes as free transport's kernels take them (FreeTransport._fixed: the table and its grid)."""
     return T.with_grid(np.column_stack((c, h, cos, sin)))
@@ -292,7 +303,7 @@ def test_a_bottles_list_holds_the_fixed_boxes_within_reach_of_it(seed):
     size = int(rng.integers(1, 8))
     listed_at, near, count = np.zeros((20, 3)), np.zeros((20, size), np.int64), np.zeros(20, np.int64)
     for n in range(20):
-        T._relist(n, b["positions"], b["radii"], b["half_heights"], listed_at, near, count, fixed_table(c, h, cos, sin))
+        T._relist(n, body(b), T.Fixed(*fixed_table(c, h, cos, sin), listed_at, near, count))
         found, total = ref.listed(n, b["positions"], b["radii"], b["half_heights"], c, h, cos, sin, size)
         assert list(near[n, :len(found)]) == found and count[n] == total
         assert (listed_at[n] == b["positions"][n]).all()
@@ -313,10 +324,10 @@ def test_a_bottles_way_reaches_a_fixed_box_as_against_every_box(seed, times, fas
     listed_at = p - np.column_stack((rng.uniform(-1, 1, (30, 2)) * (T.LIST / 2.0 / math.sqrt(2.0)), np.zeros(30)))
     near, count = np.zeros((30, T.NEAR), np.int64), np.zeros(30, np.int64)
     for n in range(30):
-        T._relist(n, listed_at, b["radii"], b["half_heights"], listed_at.copy(), near, count, fixed_table(c, h, cos, sin))
+        T._relist(n, body(b, listed_at), T.Fixed(*fixed_table(c, h, cos, sin), listed_at.copy(), near, count))
     rows = np.arange(30, dtype=np.int64)
-    got = T._fixed_hit(rows, times, DT, p, v, b["pulls"], b["ahead"], b["radii"], b["half_heights"], listed_at,
-                       near, count, fields.table(), fixed_table(c, h, cos, sin))
+    got = T._fixed_hit(rows, times, DT, body(b), way(b["ahead"], b["pulls"]), fields.table(),
+                       T.Fixed(*fixed_table(c, h, cos, sin), listed_at, near, count))
     expected = ref.fixed_hit(fields, rows, times, DT, p, v, b["pulls"], b["ahead"], b["radii"], b["half_heights"],
                              c, h, cos, sin)
     assert (got == expected).all(), np.flatnonzero(got != expected)
@@ -338,7 +349,7 @@ def test_whether_a_bottle_rides_on_its_belt_over_a_look(seed, times):
     p, v, ahead = b["positions"], b["velocities"], b["ahead"]
     rows = np.arange(30, dtype=np.int64)
     now = fields.which(p)
-    ok, still, stays = T._on_belt(rows, now, times, DT, p, v, b["pulls"], ahead, fields.table())
+    ok, still, stays = T._on_belt(rows, now, times, DT, body(b), way(ahead, b["pulls"]), fields.table())
     for n in rows:
         k, m = now[n], ahead[n] * times
         there_point = p[n] + v[n] * (m * DT)
@@ -349,7 +360,7 @@ def test_whether_a_bottle_rides_on_its_belt_over_a_look(seed, times):
         assert stays[n] == (riding and there == k and ref.field_of(fields, pulled)[0] == k)
         assert still[n] == (riding and ref.still_on(fields.speeds[k], v[n]))
         assert ok[n] == (riding and not still[n])
-        assert T._belt(n, m, DT, p, v, b["pulls"], fields.table()) == ref.on_one_belt(
+        assert T._belt(n, m, DT, body(b), way(ahead, b["pulls"]), fields.table()) == ref.on_one_belt(
             fields, n, m, DT, p, v, b["pulls"])
 
 
@@ -361,7 +372,7 @@ def test_a_bodys_pull_is_its_belts_law_now_and_its_most_the_largest_on_its_way(s
     p, v, ahead = b["positions"], b["velocities"], b["ahead"]
     rows = np.sort(rng.choice(30, 20, replace=False)).astype(np.int64)
     pulls, most = np.full((30, 2), 7.0), np.zeros(30)
-    T._pulls(rows, p, v, b["masses"], ahead, DT, fields.explicit, pulls, most, fields.table())
+    T._pulls(rows, DT, fields.explicit, body(b), way(ahead, pulls, most), fields.table())
     for n in range(30):
         if n not in rows:
             assert (pulls[n] == 7.0).all() and most[n] == 0.0    # untouched
@@ -417,10 +428,10 @@ def test_the_bodies_a_free_bottle_could_touch_are_found_by_every_pair_alike(seed
     against = np.zeros(40, bool)
     against[play[rng.random(len(play)) < 0.7]] = True
     pulls, most = np.zeros((40, 2)), np.zeros(40)
-    T._pulls(play, p, v, b["masses"], b["ahead"], DT, fields.explicit, pulls, most, fields.table())
+    T._pulls(play, DT, fields.explicit, body(b), way(b["ahead"], pulls, most), fields.table())
     parts = (rng.uniform(-0.4, 0.4, (2, 3)), rng.uniform(0.005, 0.05, (2, 3)))
-    got = T._touching(rows, play, times, DT, p, b["orientations"], v, b["spins"], b["radii"], b["half_heights"],
-                      b["ahead"], most, pulls, free, joined, against, fields.table(), *parts)
+    got = T._touching(rows, play, times, DT, body(b), way(b["ahead"], pulls, most), free, joined, against,
+                      fields.table(), *parts)
     expected = ref.touching(fields, rows, play, times, DT, p, b["orientations"], v, b["spins"], b["radii"],
                             b["half_heights"], b["ahead"], most, pulls, free, joined, against, *parts)
     assert (got == expected).all(), np.flatnonzero(got != expected)
@@ -435,7 +446,7 @@ def test_a_train_grows_by_every_body_within_twice_the_margin_of_it(seed):
     start = np.zeros(30, bool)
     start[rng.choice(30, 3, replace=False)] = True
     got = start.copy()
-    T._grow(got, pool, b["positions"], b["radii"], b["half_heights"])
+    T._grow(got, pool, body(b))
     p, r, h = b["positions"], b["radii"], b["half_heights"]
     apart = np.hypot(*(p[:, None, :2] - p[None, :, :2]).transpose(2, 0, 1)) - r[:, None] - r[None, :]
     near = (apart < 2.0 * R.SHAPE_MARGIN) & (np.abs(p[:, None, 2] - p[None, :, 2]) < h[:, None] + h[None, :])
@@ -472,19 +483,18 @@ def look_scene(rng):
     b["positions"][:, 2] = rng.choice([0.0, 0.005], 30) + b["half_heights"] + rng.uniform(-0.008, 0.008, 30)
     b["play"] = np.sort(rng.choice(30, 26, replace=False)).astype(np.int64)
     b["pulls"], b["most"] = np.zeros((30, 2)), np.zeros(30)
-    T._pulls(b["play"], b["positions"], b["velocities"], b["masses"], b["ahead"], DT, fields.explicit, b["pulls"],
-             b["most"], fields.table())
+    T._pulls(b["play"], DT, fields.explicit, body(b), way(b["ahead"], b["pulls"], b["most"]), fields.table())
     c, h, cos, sin = yawed_boxes(rng, int(rng.integers(1, 12)))
     lists = (b["positions"].copy(), np.zeros((30, T.NEAR), np.int64), np.zeros(30, np.int64))
     for n in range(30):
-        T._relist(n, b["positions"], b["radii"], b["half_heights"], *lists, fixed_table(c, h, cos, sin))
+        T._relist(n, body(b), T.Fixed(*fixed_table(c, h, cos, sin), *lists))
     parts = (rng.uniform(-0.4, 0.4, (1, 3)), rng.uniform(0.005, 0.05, (1, 3)), rng.uniform(0, 0.5, (1, 3)))
     return fields, b, parts, (c, h, cos, sin), lists
 
 
 def kernel_state(b):
-    return (b["positions"], b["orientations"], b["velocities"], b["spins"], b["masses"], b["radii"],
-            b["half_heights"], b["ahead"], b["most"].copy(), b["pulls"].copy())
+    """The scene's bodies and their look as the kernels take them, with pulls of their own to take afresh."""
+    return body(b), way(b["ahead"], b["pulls"].copy(), b["most"].copy())
 
 
 @SETTINGS
@@ -495,10 +505,10 @@ def test_which_awake_bottles_leave_the_engine(seed):
     free = rng.random(30) < 0.3
     joined = free | (rng.random(30) < 0.2)
     rows = b["play"][rng.random(len(b["play"])) < 0.6]
-    p, q, v, w, m, r, hh, ahead, most, pulls = kernel_state(b)
-    go, near = T._leave(rows, b["play"], b["play"], DT, p, q, v, w, m, r, hh, ahead, most, pulls, free, joined,
-                        fields.table(), fields.explicit, np.hstack(parts), *lists, fixed_table(*fixed))
-    assert (most == b["most"]).all() and (pulls == b["pulls"]).all()   # taken afresh: the same again
+    bodies_, look = kernel_state(b)
+    go, near = T._leave(rows, b["play"], b["play"], DT, bodies_, look, free, joined, fields.explicit, fields.table(),
+                        np.hstack(parts), T.Fixed(*fixed_table(*fixed), *lists))
+    assert (look.most == b["most"]).all() and (look.pulls == b["pulls"]).all()   # taken afresh: the same again
     expected = ref.leave(fields, rows, DT, b, free, joined, parts, fixed)
     assert (go == expected[0]).all() and (near == expected[1]).all()
 
@@ -514,10 +524,10 @@ def test_a_look_at_the_free_bottles(seed, whole):
     awake = np.setdiff1d(b["play"], rows)[: int(rng.integers(0, 10))].astype(np.int64)
     tick = 600
     clear = np.where(rng.random(30) < 0.5, tick + 30, tick).astype(np.int64)
-    p, q, v, w, m, r, hh, ahead, most, pulls = kernel_state(b)
+    bodies_, look = kernel_state(b)
     got_clear = clear.copy()
-    got = T._look(tick, whole, rows, b["play"], awake, b["play"], DT, p, q, v, w, m, r, hh, ahead, most, pulls,
-                  got_clear, free, fields.table(), fields.explicit, np.hstack(parts), *lists, fixed_table(*fixed))
+    got = T._look(tick, whole, rows, b["play"], awake, b["play"], DT, bodies_, look, got_clear, free, fields.explicit,
+                  fields.table(), np.hstack(parts), T.Fixed(*fixed_table(*fixed), *lists))
     expected = ref.look(fields, tick, whole, rows, awake, DT, b, clear, free, parts, fixed)
     for name, a, e in zip(("due", "back", "ok", "still", "near", "now"), got, expected):
         assert (a == e).all(), (name, a, e)
