@@ -66,7 +66,8 @@ bench: $(STAMP) fmus view-assets chromium
 	$(PY) -m tests.bench_report
 
 # The long hard cases (tests/hard/): 10 simulated minutes of a jam, an hour of the paper's loop and of
-# the bottling plant, each against its stated bounds; results to build/bench/stability.json for the report.
+# the bottling plant, each against its stated bounds, side by side on a LocalCluster (one worker a core);
+# results to build/bench/stability.json for the report.
 stability: $(STAMP) fmus
 	$(PY) -m tests.hard.stability
 

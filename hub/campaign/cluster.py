@@ -23,7 +23,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 
 import dask
-from distributed import Client, Event, LocalCluster, wait
+from distributed import Client, Event, LocalCluster, as_completed, wait
 from distributed.client import FutureCancelledError, FuturesCancelledError
 from distributed.scheduler import KilledWorker
 
@@ -161,6 +161,20 @@ class Cluster:
             future = self.client.submit(_task, spec, self.name, key=f"{self.name}-case{index}-try{attempt}",
                                         pure=False)
         self.pending[future] = (index, spec, attempt)
+
+    def each(self, fn, items: list):
+        """`fn(item)` for every item on the cluster's workers, as many at once as they have threads,
+        yielding (item, what it returned) as each call ends — or the exception it raised. For work
+        that is Python, not a scenario (`make stability`'s hard cases, which judge by their own
+        checkers): it runs in the worker's process, so a worker that dies fails its call (Dask's
+        KilledWorker; the embedded cluster tries no call twice)."""
+        with _asking(self, "handing it work"):
+            futures = {self.client.submit(fn, item, key=f"{self.name}-call{i}", pure=False): item
+                       for i, item in enumerate(items)}
+        with _asking(self, "waiting for its work"):
+            for future in as_completed(futures):
+                failed = future.exception()
+                yield futures[future], failed if failed is not None else future.result()
 
     def running(self) -> int:
         """Cases a worker is running now: each worker's cases handed to it, up to its threads (the
