@@ -77,7 +77,7 @@ screenshot: $(STAMP) fmus view-assets chromium
 	$(PY) -m tests.screenshot_view hub/view/bottling_plant.png
 
 fmus: $(STAMP)
-	@if [ -f fmus/Makefile ]; then $(MAKE) -s --no-print-directory -C fmus PYTHON=$(abspath $(PY)) BUILD=$(abspath build/fmus); fi
+	@if [ -f fmus/Makefile ]; then $(MAKE) -s -j$(shell nproc) --no-print-directory -C fmus PYTHON=$(abspath $(PY)) BUILD=$(abspath build/fmus); fi
 
 venv: $(STAMP)
 
