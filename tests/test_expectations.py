@@ -195,3 +195,16 @@ def test_an_interrupted_run_keeps_what_is_settled_and_leaves_the_rest_unjudged()
         "1 jammed: b1 on belt from 1.2 s", f"{when} (so far: held)", "4 delivered",
         f"{when} (so far: the run ended at t = 2 s with 1 of 4 orders out)",
         f"{when} (so far: never judged: end.bin.taken never fired (say `allow_empty: true` if that is a pass))"]
+
+
+def test_a_loaded_scenario_runs_as_its_file_does_and_takes_no_overrides_again(fmus):
+    loaded = load_scenario(SWITCH, {"run.duration": 0.5})
+    with Simulation(loaded) as sim:
+        assert sim.scenario is loaded
+        sim.run()
+        by_file = Simulation(SWITCH, {"run.duration": 0.5})
+        with by_file:
+            by_file.run()
+            assert sim["main_end.count.total"] == by_file["main_end.count.total"] and sim.time == by_file.time == 0.5
+    with pytest.raises(TypeError, match="overrides and logic go with a scenario's file: this Scenario is loaded"):
+        Simulation(loaded, {"run.duration": 1.0})

@@ -26,8 +26,9 @@ class Simulation:
 
     `scenario` is a file, or a Scenario loaded already with its overrides (`planthub test` loads it
     first, to write a JUnit file for a scenario that does not load). `overrides` take dotted keys
-    as `--set` does; `logic` maps an object to a replacement FMU for its state logic. Every source slot is computed (not only the ones flows, the recording and
-    the expectations read), so any slot can be read at any point; `every_source=False` computes
+    as `--set` does; `logic` maps an object to a replacement FMU for its state logic. Every source
+    slot is computed (not only the ones flows, the recording and the expectations read), so any
+    slot can be read at any point; `every_source=False` computes
     only those (`planthub test`: every bottle's pose at every point is a third of a plant's run). `out` writes recording.csv and events.csv, and
     summary.json when the simulation is closed. `summary()` gives the run summary at any point:
     for a plant (sinks, sources) bottles in, delivered, misrouted, on the line, throughput, jams.
