@@ -31,8 +31,8 @@ def pages(tmp_path_factory):
     # leaves the plant at about 4 s, the run ends at 5 s).
     with hub(folder, SCENARIO, "--set", "run.duration=5", "--set", f"exercise={json.dumps(EXERCISE)}",
              realtime=0.1) as (started, endpoint, run_dir), \
-            views(folder, "switch", endpoint, ("instructor", ()), ("trainee", ("--role", "trainee"))) as urls, \
-            two_pages(*urls) as ((teacher, pupil), errors):
+            views(folder, "switch", endpoint, ("instructor", ()), ("trainee", ("--role", "trainee"))) as both, \
+            two_pages(*(url for _, url in both)) as ((teacher, pupil), errors):
         yield teacher, pupil, run_dir, errors
 
 

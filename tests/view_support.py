@@ -72,18 +72,18 @@ def hub(folder: Path, scenario: Path, *args, realtime: float = 1.0):
 @contextlib.contextmanager
 def view(folder: Path, run: str, endpoint: str, *args, name: str = "view-test", timeout: float = 60.0):
     """`planthub view RUN --connect ENDPOINT --port 0`, once it printed its address; yields (Started, url)."""
-    with planthub(folder, name, "view", run, "--connect", endpoint, "--port", 0, "--name", name, *args) as started:
-        yield started, wait_for_url(started, timeout)
+    with views(folder, run, endpoint, (name, args), timeout=timeout) as ((started, url),):
+        yield started, url
 
 
 @contextlib.contextmanager
 def views(folder: Path, run: str, endpoint: str, *pages: tuple[str, tuple], timeout: float = 60.0):
-    """Several `planthub view RUN` of one run, each (name, its own args), started side by side and
-    waited for together; yields their urls in that order."""
+    """Several `planthub view RUN --connect ENDPOINT --port 0` of one run, each (name, its own args),
+    started side by side and waited for together; yields (Started, url) of each, in that order."""
     with contextlib.ExitStack() as stack:
         started = [stack.enter_context(planthub(folder, name, "view", run, "--connect", endpoint, "--port", 0,
                                                 "--name", name, *args)) for name, args in pages]
-        yield [wait_for_url(s, timeout) for s in started]
+        yield [(s, wait_for_url(s, timeout)) for s in started]
 
 
 def record(folder: Path, scenario: Path, *args, timeout: float = 120.0) -> Path:

@@ -10,8 +10,8 @@ with DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES=0 for the same rule).
 
 The embedded cluster's processes only wait for children, so it also leaves out what Dask does for
 a cluster that computes (EMBEDDED): a worker's profiler sampling its threads every 10 ms, the
-event-loop and system monitors' ticks. Idle, its scheduler and two workers then take 0.18 s of
-CPU in 10 s instead of 1.1 s, which the cases' own processes get on a machine of a few cores.
+event-loop and system monitors' ticks: the CPU they took goes to the cases' own processes on a
+machine of a few cores (the campaigns' figures in tests/README.md).
 """
 from __future__ import annotations
 

@@ -8,8 +8,8 @@ scratch folder, and only then serves. Each case is `os.fork()` of it — a proce
 still, in a session of its own, with the zygote's warm memory — that returns from `serve()` into
 this file's `__main__` and becomes `planthub test ARGS`, as `python -m hub` would, and ends as an
 interpreter ends — its threads joined, atexit's handlers run, its streams flushed, its exit status
-the same — except that it does not tear down the zygote's modules one by one (`_end`: 0.3 s of a
-bottling-plant case, nothing the case wrote). It dies with the zygote (Linux's parent-death signal),
+the same — except that it does not tear down the zygote's modules one by one (`_end`; a bottling
+plant's are many, and their teardown writes nothing of the case's). It dies with the zygote (Linux's parent-death signal),
 and the zygote with its worker: it reads requests on its stdin and exits at end of file, so a
 worker that dies takes its zygote, and so its cases, with it.
 
@@ -35,7 +35,6 @@ import sys
 import tempfile
 import threading
 import time
-import traceback
 
 WARM_SECONDS = 0.2   # s of the scenario the zygote runs to warm up: enough for every compiled loop's first call
 WARM_LIMIT = 60.0    # s a worker waits for its zygote to be ready before it starts its cases afresh
@@ -273,10 +272,10 @@ def _become_case(zygote: int, output: str) -> None:
 
 def _end(args: list[str]):
     """In the forked child: `planthub ARGS`, then the interpreter's end as `python -m hub` makes it
-    — a status from SystemExit (a message printed: 1), a traceback for an exception (1), death by
-    SIGINT for an uncaught Ctrl-C — after the threads that are not daemons are joined, atexit's
-    handlers run and the standard streams flushed; then os._exit, which skips only the modules'
-    teardown."""
+    — a status from SystemExit (a message printed: 1), sys.excepthook for an exception (1), death
+    by SIGINT for an uncaught Ctrl-C — after the threads' exit hooks, the threads that are not
+    daemons joined, atexit's handlers and the standard streams flushed; then os._exit, which skips
+    only the modules' teardown."""
     code, interrupted = 0, False
     try:
         _planthub(args)
@@ -287,15 +286,15 @@ def _end(args: list[str]):
             print(exc.code, file=sys.stderr)
             code = 1
     except KeyboardInterrupt:
-        traceback.print_exc()
+        sys.excepthook(*sys.exc_info())
         interrupted = True
     except BaseException:   # noqa: BLE001 — as the interpreter does with an uncaught exception
-        traceback.print_exc()
+        sys.excepthook(*sys.exc_info())
         code = 1
-    for thread in threading.enumerate():
-        if thread is not threading.main_thread() and not thread.daemon:
-            thread.join()
-    atexit._run_exitfuncs()   # CPython's own call at its end (multiprocessing's fork children skip even these)
+    # CPython's own calls at its end, in its order: the threads' exit hooks (an idle executor's
+    # workers end only by theirs) and every thread that is not a daemon joined, then atexit's.
+    threading._shutdown()
+    atexit._run_exitfuncs()
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()
@@ -303,7 +302,8 @@ def _end(args: list[str]):
             pass
     if interrupted:
         signal.signal(signal.SIGINT, signal.SIG_DFL)
-        os.kill(os.getpid(), signal.SIGINT)
+        signal.raise_signal(signal.SIGINT)
+        code = 128 + signal.SIGINT   # CPython's own status where the signal did not end it
     os._exit(code)
 
 

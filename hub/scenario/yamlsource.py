@@ -99,7 +99,7 @@ def _compose(text: str):
     """The node tree of one YAML document (None: empty); YAMLError if it is not one. The tree is
     only read (values are made from it afresh each time), so a text composed once serves every
     later read of the same text: the second load of a scenario in one process, and each case a
-    campaign's zygote forks after its warm-up (0.17 s of the bottling plant's PyYAML)."""
+    campaign's zygote forks after its warm-up (PyYAML's composer is pure Python)."""
     loader = _Loader(text)
     try:
         return loader.get_single_node()
