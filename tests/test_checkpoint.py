@@ -185,8 +185,9 @@ def test_a_checkpoint_may_resume_with_a_longer_duration(switch_checkpoint):
 
 
 def test_a_checkpoint_of_another_format(switch_checkpoint):
-    other = switch_checkpoint.replace(b'"format": 1', b'"format": 99', 1)
-    with pytest.raises(CheckpointError, match=r"^saved.ckpt: checkpoint format 99; this planthub reads format 1"):
+    other = switch_checkpoint.replace(b'"format": %d' % checkpoint.FORMAT, b'"format": 99', 1)
+    with pytest.raises(CheckpointError, match=rf"^saved.ckpt: checkpoint format 99; this planthub reads format "
+                                              rf"{checkpoint.FORMAT}$"):
         _resume(other)
 
 

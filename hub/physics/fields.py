@@ -2,11 +2,13 @@
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
 from hub.physics.frames import TAU, Arc, CentreLines, Pose, Straight
+from hub.physics.grid import at_point, grid_of
 
 GRIPS = ("surface", "along")
 INTEGRATORS = ("exact", "explicit")
@@ -19,6 +21,12 @@ SPIN_AT_REST = 0.01   # rad/s: a bottle spinning slower than this about the vert
 OX, OY, COS, SIN, ARC, TURN, RADIUS, ANGLE0, LENGTH, HALF_WIDTH, Z_LO, Z_HI, RATE, PER_MASS, SPEED, SURFACE, LIMIT, \
     HEIGHT, STRAIGHT = range(19)
 COLUMNS = 19
+
+#: The regions as `field_at` takes them: the table above and a grid of the regions' bounds
+#: (hub/physics/grid.py), so that finding the region under a point looks at the few near it.
+Regions = namedtuple("Regions", "table grid")
+#: m a region's bounds in its grid are widened by, against rounding
+BOUNDS_MARGIN = 1e-6
 
 
 class ForceFields:
@@ -85,7 +93,7 @@ class ForceFields:
         self.straight_law = np.zeros(0, bool)
         # The regions as one array for compiled loops, made again when a region is added; the
         # arrays above are copied into it, so they change only through add_region and set_speed.
-        self._table = None
+        self._table = self._regions = None
 
     def __len__(self) -> int:
         return len(self.lines)
@@ -115,7 +123,7 @@ class ForceFields:
         # Two bottles on it follow one law that never lets their velocities part (transport.py):
         # not on an arc, nor with the gain per body, nor with the explicit law (unstable past k·dt = 2).
         self.straight_law = ~self.lines.is_arc & self.per_mass & (not self.explicit)
-        self._table = None
+        self._table = self._regions = None
         return index
 
     def set_speed(self, field: int, speed: float) -> None:
@@ -138,7 +146,7 @@ class ForceFields:
         for every body that moves: one compiled loop, a fifth of the same test on numpy arrays)."""
         if len(self) == 0 or len(points) == 0:
             return np.full(len(points), -1)
-        return _nearest(np.ascontiguousarray(points, float), self.table())
+        return _nearest(np.ascontiguousarray(points, float), self.regions())
 
     def table(self) -> np.ndarray:
         """(regions, COLUMNS): every region's centre line, half width, heights and law, in the columns
@@ -158,6 +166,21 @@ class ForceFields:
                 table[:, column] = values
             self._table = table
         return self._table
+
+    def regions(self) -> Regions:
+        """The table with its grid (`Regions`), as `field_at` takes them. A region's bounds: a
+        straight's rectangle, an arc's whole ring."""
+        table = self.table()
+        if self._regions is None or self._regions.table is not table:
+            straight = table[:, ARC] == 0.0
+            half = 0.5 * table[:, LENGTH] * straight
+            reach = np.where(straight, 0.0, table[:, RADIUS]) + table[:, HALF_WIDTH] + BOUNDS_MARGIN
+            boxes = np.column_stack((table[:, OX] + half * table[:, COS], table[:, OY] + half * table[:, SIN],
+                                     np.zeros(len(table)), np.where(straight, half + BOUNDS_MARGIN, reach), reach,
+                                     np.zeros(len(table)), np.where(straight, table[:, COS], 1.0),
+                                     np.where(straight, table[:, SIN], 0.0)))
+            self._regions = Regions(table, grid_of(boxes))
+        return self._regions
 
     def forces(self, points: np.ndarray, velocities: np.ndarray, masses: np.ndarray):
         """Return (body indices, forces (M,3)) for the bodies whose point lies in some field."""
@@ -219,20 +242,24 @@ class ForceFields:
 
 
 @njit(cache=True)
-def _nearest(points, table):
+def _nearest(points, regions):
     """Per point (N,3): `field_at`."""
     out = np.empty(points.shape[0], np.int64)
     for i in range(points.shape[0]):
-        out[i] = field_at(points[i, 0], points[i, 1], points[i, 2], table)
+        out[i] = field_at(points[i, 0], points[i, 1], points[i, 2], regions)
     return out
 
 
 @njit(cache=True)
-def field_at(x, y, z, table):
+def field_at(x, y, z, regions):
     """The region the point (x, y, z) lies in whose centre line is nearest (the first on a tie),
-    or −1 — CentreLines.local's coordinates, region by region. `table`: ForceFields.table."""
+    or −1 — CentreLines.local's coordinates, region by region, of the regions listed in the
+    point's cell of the grid (the others' bounds do not reach it). `regions`: ForceFields.regions."""
+    table, grid = regions
     best, found = np.inf, -1
-    for k in range(table.shape[0]):
+    first, last = at_point(grid, x, y)
+    for s in range(first, last):
+        k = grid[s]
         if z < table[k, Z_LO] or z > table[k, Z_HI]:
             continue
         dx, dy = x - table[k, OX], y - table[k, OY]

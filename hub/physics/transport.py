@@ -229,7 +229,7 @@ class FreeTransport:
         due, back, ok, still, near, now = _look(
             tick, whole, rows, b.in_play_rows() if b.moved_rows is None else b.moved_rows,
             np.asarray(awake, np.int64), b.in_play_rows(), self.dt, self._body(positions), self._way(), self.clear,
-            self.free, fields.explicit, fields.table(), self._part_boxes(), self._lists())
+            self.free, fields.explicit, fields.regions(), self._part_boxes(), self._lists())
         settle = None
         if due.any():
             look = rows[due]
@@ -379,7 +379,7 @@ class FreeTransport:
         first, for `pulled` (`_pulls`). One compiled call (`_leave`)."""
         b, fields = self.bodies, self.fields
         go, near = _leave(np.asarray(rows, np.int64), np.asarray(pulled, np.int64), b.in_play_rows(), self.dt,
-                          self._body(), self._way(), self.free, joined, fields.explicit, fields.table(),
+                          self._body(), self._way(), self.free, joined, fields.explicit, fields.regions(),
                           self._part_boxes(), self._lists())
         return rows[go], rows[near]
 
@@ -400,7 +400,9 @@ class FreeTransport:
         if len(rows) == 0:
             return
         b = self.bodies
-        _advance(rows, b.positions, b.orientations, b.velocities, b.masses, self.offsets, *self.fields.laws())
+        fields = self.fields
+        _advance(rows, b.positions, b.orientations, b.velocities, b.masses, self.offsets, fields.dt, fields.explicit,
+                 *fields.regions())
 
     def _changed(self) -> None:
         self.rows = np.flatnonzero(self.free)

@@ -3,7 +3,7 @@ back, and the belt's law it follows while free (transport.py says what they deci
 
 Each is plain Python that numba compiles (`cache=True`: make warm compiles them once); each takes
 a few packed tables — the bodies' state (Body), each body's look (Way), the fixed boxes with each
-body's list of them (Fixed), the fields' table (ForceFields.table) — named tuples of the arrays
+body's list of them (Fixed), the belts' regions (ForceFields.regions) — named tuples of the arrays
 as they are, never a Python object; tests/physics/test_kernels.py holds each to a plain numpy
 reference on random scenes, and runs the physics tests once more with the JIT off. The laws and
 limits below are what the tests decide by.
@@ -16,7 +16,8 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from hub.physics.fields import ARC, HEIGHT, SPEED, STRAIGHT, field_at, law_at
+from hub.physics.fields import ARC, HEIGHT, SPEED, STRAIGHT, Regions, field_at, law_at
+from hub.physics.grid import grid_of, in_cells
 from hub.physics.rest import SHAPE_MARGIN, bound, extent, turning
 
 TILT = 0.0175         # rad (1°): most tilt a bottle may leave the engine with
@@ -31,8 +32,6 @@ FALL = 9.81           # m/s²: what two steady bodies' heights may close at, bey
 LONG = 4              # a whole look goes this many look-aheads forward where it can
 LIST = 0.1            # m: the fixed boxes within this of a free bottle are the ones it is tested against
 NEAR = 32             # boxes a bottle's list holds; one with more within LIST stays in the engine
-CELL = 0.25           # m: the side of a cell of the fixed boxes' grid (`with_grid`), at least
-CELLS = 1 << 20       # cells the grid has at most: a larger floor gets larger cells
 
 #: every body's state, a row each (hub/physics/bodies.py's arrays; spins: angular velocities)
 Body = namedtuple("Body", "positions orientations velocities spins masses radii half_heights")
@@ -45,7 +44,7 @@ Fixed = namedtuple("Fixed", "boxes grid listed_at near near_count")
 
 
 @njit(cache=True)
-def _fixed_hit(rows, times, dt, body, way, table, fixed):
+def _fixed_hit(rows, times, dt, body, way, regions, fixed):
     """(len(rows),): whether each of `rows`, headed on for `times` × its look-ahead (n ticks),
     could reach a fixed box (`fixed`: the table of centre, half extents, cos and sin of the yaw,
     one a row, its grid (`with_grid`) and the bodies' lists of them).
@@ -104,7 +103,7 @@ def _fixed_hit(rows, times, dt, body, way, table, fixed):
         gx, gy = ux * along, uy * along
         widen = across + FIXED_MARGIN
         px, py = positions[n_, 0], positions[n_, 1]
-        straight = _belt(n_, n, dt, body, way, table) >= 0
+        straight = _belt(n_, n, dt, body, way, regions) >= 0
         # The list holds every box its way can reach only while the way, widened, stays within
         # LIST/2 of where it is (it is within LIST/2 of where it was listed): a longer way (a fast
         # bottle over a long look) is tested against every box of the grid's cells it can reach,
@@ -114,7 +113,7 @@ def _fixed_hit(rows, times, dt, body, way, table, fixed):
         count = 0
         if every:
             reach = radii[n_] + far
-            count = _in_cells(grid, px - reach, px + reach, py - reach, py + reach, found)
+            count = in_cells(grid, px - reach, px + reach, py - reach, py + reach, found)
         for j in range(count if every else near_count[n_]):
             k = found[j] if every else near[n_, j]
             if abs(positions[n_, 2] - c[k, 2]) > h[k, 2] + half_heights[n_] + FIXED_MARGIN:
@@ -137,12 +136,13 @@ def _fixed_hit(rows, times, dt, body, way, table, fixed):
 
 
 @njit(cache=True)
-def _on_belt(rows, now, times, dt, body, way, table):
+def _on_belt(rows, now, times, dt, body, way, regions):
     """(ok, still, stays), each (len(rows),): riding a belt now (`now`: the field under each)
     and, `times` × its look-ahead on, one at the same height, not coming to a stop on a still
     belt (ok); on a belt, coming to a stop on a still one (still); on the same belt all the
     way, at its velocity and with the belt's pull (stays: its law, and so its pull, does not
     change on the way — one crossing onto a slower belt is pulled harder there)."""
+    table = regions.table
     positions, velocities, ahead, pulls = body.positions, body.velocities, way.ahead, way.pulls
     count = rows.shape[0]
     ok, still, stays = np.zeros(count, np.bool_), np.zeros(count, np.bool_), np.zeros(count, np.bool_)
@@ -154,11 +154,11 @@ def _on_belt(rows, now, times, dt, body, way, table):
         x = positions[n, 0] + velocities[n, 0] * (m * dt)
         y = positions[n, 1] + velocities[n, 1] * (m * dt)
         z = positions[n, 2] + velocities[n, 2] * (m * dt)
-        there = field_at(x, y, z, table)
+        there = field_at(x, y, z, regions)
         if there < 0 or table[k, HEIGHT] != table[there, HEIGHT]:
             continue
         grow = m * (m + 1.0) / 2.0 * dt
-        stays[i] = there == k and field_at(x + pulls[n, 0] * grow, y + pulls[n, 1] * grow, z, table) == k
+        stays[i] = there == k and field_at(x + pulls[n, 0] * grow, y + pulls[n, 1] * grow, z, regions) == k
         vx, vy = velocities[n, 0], velocities[n, 1]
         still[i] = table[k, SPEED] == 0.0 and vx * vx + vy * vy < STILL * STILL
         ok[i] = not still[i]
@@ -166,13 +166,14 @@ def _on_belt(rows, now, times, dt, body, way, table):
 
 
 @njit(cache=True)
-def _pulls(rows, dt, explicit, body, way, table):
+def _pulls(rows, dt, explicit, body, way, regions):
     """The pull each moving body of `rows` gets from the belt under it at its velocity now
     (`pulls`: what the next tick applies), in place of the last tick's, which is stale once a
     bottle crossed onto another belt; and `most`, the most it may be pulled over a look (one,
     two or LONG look-aheads forward): the larger of now and the law where its way ends, which
     may be another belt's. Bodies not in `rows` (resting, parked) are not pulled: the caller
     (`_look`, `_leave`) zeroes `most` first."""
+    table = regions.table
     positions, velocities, masses = body.positions, body.velocities, body.masses
     ahead, most, pulls = way
     for n in rows:
@@ -181,7 +182,7 @@ def _pulls(rows, dt, explicit, body, way, table):
         largest, here = 0.0, -1
         for times in (0.0, 1.0, 2.0, float(LONG)):
             h = ahead[n] * times * dt
-            k = field_at(x + vx * h, y + vy * h, z + velocities[n, 2] * h, table)
+            k = field_at(x + vx * h, y + vy * h, z + velocities[n, 2] * h, regions)
             if times > 0.0 and k == here and (k < 0 or not table[k, ARC]):
                 continue        # the same straight belt: the same law at the same velocity
             dvx = dvy = 0.0
@@ -195,12 +196,13 @@ def _pulls(rows, dt, explicit, body, way, table):
 
 
 @njit(cache=True)
-def _advance(rows, positions, orientations, velocities, masses, offsets, dt, explicit, table):
+def _advance(rows, positions, orientations, velocities, masses, offsets, dt, explicit, table, grid):
     """FreeTransport.advance, row by row: the field under its centre (`field_at`), the law's
     change at its grip point (`law_at`: its base is frames.base_points' with no spin), then
     x ← x + v·dt."""
+    regions = Regions(table, grid)   # made here: a named tuple given costs a call per tick its typing
     for n in rows:
-        k = field_at(positions[n, 0], positions[n, 1], positions[n, 2], table)
+        k = field_at(positions[n, 0], positions[n, 1], positions[n, 2], regions)
         if k >= 0:
             px, py = positions[n, 0], positions[n, 1]
             if offsets[n] > 0.0:
@@ -226,7 +228,7 @@ def _relist(n, body, fixed):
     px, py = positions[n, 0], positions[n, 1]
     found = np.empty(c.shape[0], np.int64)
     count = 0
-    for j in range(_in_cells(grid, px - reach, px + reach, py - reach, py + reach, found)):
+    for j in range(in_cells(grid, px - reach, px + reach, py - reach, py + reach, found)):
         k = found[j]
         if abs(positions[n, 2] - c[k, 2]) > h[k, 2] + half_heights[n] + FIXED_MARGIN + LIST:
             continue
@@ -293,7 +295,7 @@ def _box_distance(x, y, hx, hy):
 
 
 @njit(cache=True)
-def _touching(rows, play, times, dt, body, way, free, joined, against, table, part_centres, part_extents):
+def _touching(rows, play, times, dt, body, way, free, joined, against, regions, part_centres, part_extents):
     """(len(rows),): whether each of `rows` could touch another body in play (or of `among`)
     or a moving part within `times` × its look-ahead. Their bounds first (rest.bound; pairs
     found by a sweep along the plant's longer axis when there are many), then for each pair
@@ -316,7 +318,7 @@ def _touching(rows, play, times, dt, body, way, free, joined, against, table, pa
     comes too (`FreeTransport._trains`).
 
     `play`: the bodies in play (sorted, holds `rows`); `against`: a mask of the bodies they are
-    looked at against; `joined`: the bodies that may form a train; `table`: ForceFields.table
+    looked at against; `joined`: the bodies that may form a train; `regions`: ForceFields.regions
     (its STRAIGHT column: straight with its law scaled by the mass); the moving parts'
     boxes (part_centres, part_extents). Pairs by their bounds (rest.bound), found along the
     plant's longer axis from each row outwards. Only `rows` and the bodies of `against` are
@@ -390,13 +392,13 @@ def _touching(rows, play, times, dt, body, way, free, joined, against, table, pa
                 if (abs(positions[na, 0] - positions[no, 0]) >= reach or abs(positions[na, 1] - positions[no, 1]) >= reach
                         or abs(positions[na, 2] - positions[no, 2]) >= reach):
                     continue      # their bounds do not meet
-                if _pair(a, o, play, times, dt, body, way, belt, farthest, table, reaches, steady, joined):
+                if _pair(a, o, play, times, dt, body, way, belt, farthest, regions, reaches, steady, joined):
                     touching[i] = True
     return touching
 
 
 @njit(cache=True)
-def _pair(a, o, play, times, dt, body, way, belt, farthest, table, reaches, steady, joined):
+def _pair(a, o, play, times, dt, body, way, belt, farthest, regions, reaches, steady, joined):
     """Whether bodies play[a] and play[o] could touch within the look (`_touching`);
     not when they are a train: both joined, on one straight belt whose law scales with the mass
     and staying on it, at the same velocity and not turning — the law moves them alike."""
@@ -417,7 +419,7 @@ def _pair(a, o, play, times, dt, body, way, belt, farthest, table, reaches, stea
         travel = (closing + rock) * n * dt
         for q in (a, o):
             if belt[q] == -2:
-                belt[q] = _belt(play[q], farthest, dt, body, way, table)
+                belt[q] = _belt(play[q], farthest, dt, body, way, regions)
         one_belt = belt[a] >= 0 and belt[a] == belt[o]
         if not one_belt:
             travel += (most[na] + most[no]) * n * (n + 1.0) / 2.0 * dt   # the most each may be pulled (_pulls)
@@ -438,12 +440,13 @@ def _pair(a, o, play, times, dt, body, way, belt, farthest, table, reaches, stea
 
 
 @njit(cache=True)
-def _belt(n, m, dt, body, way, table):
+def _belt(n, m, dt, body, way, regions):
     """The straight belt with a mass-scaled law body `n` stands on and stays on for `m` ticks at
     its velocity and pull, or −1."""
+    table = regions.table
     positions, velocities, pulls = body.positions, body.velocities, way.pulls
     x, y, z = positions[n, 0], positions[n, 1], positions[n, 2]
-    now = field_at(x, y, z, table)
+    now = field_at(x, y, z, regions)
     if now < 0 or table[now, STRAIGHT] == 0.0:
         return -1
     # Its way lies in the parallelogram of its velocity's way and the pull's: all four corners on
@@ -452,7 +455,7 @@ def _belt(n, m, dt, body, way, table):
     wx, wy = velocities[n, 0] * m * dt, velocities[n, 1] * m * dt
     gx, gy = pulls[n, 0] * grow, pulls[n, 1] * grow
     for cx, cy in ((wx, wy), (gx, gy), (wx + gx, wy + gy)):
-        if field_at(x + cx, y + cy, z, table) != now:
+        if field_at(x + cx, y + cy, z, regions) != now:
             return -1
     return now
 
@@ -483,7 +486,7 @@ def _grown(extents, growth, ahead, rows, times, dt):
 
 
 @njit(cache=True)
-def _look(tick, whole, rows, pulled, awake, play, dt, body, way, clear, free, explicit, table, parts, fixed):
+def _look(tick, whole, rows, pulled, awake, play, dt, body, way, clear, free, explicit, regions, parts, fixed):
     """FreeTransport.release_near's look at the free `rows`, in one call: every pull taken afresh
     (`_pulls`, for `pulled`); the rows not due for a whole look against the bodies `awake` in
     the engine; those due (all when `whole`) LONG look-aheads forward, and what that finds near
@@ -491,11 +494,11 @@ def _look(tick, whole, rows, pulled, awake, play, dt, body, way, clear, free, ex
     the tick their look holds to. Returns (due, back, ok, still, near, now): per row whether it
     was due and whether the look against the awake bodies found it near; per row due, riding on
     (ok), coming to a stop on a still belt (still), near something (near), and its field now.
-    `table`: ForceFields.table; `parts`: FreeTransport._part_boxes; `fixed`: the fixed boxes (`_fixed_hit`)."""
+    `regions`: ForceFields.regions; `parts`: FreeTransport._part_boxes; `fixed`: the fixed boxes (`_fixed_hit`)."""
     positions, ahead = body.positions, way.ahead
     way.most[:] = 0.0
     if pulled.shape[0]:
-        _pulls(pulled, dt, explicit, body, way, table)
+        _pulls(pulled, dt, explicit, body, way, regions)
     count = rows.shape[0]
     due = np.empty(count, np.bool_)
     for i in range(count):
@@ -505,7 +508,7 @@ def _look(tick, whole, rows, pulled, awake, play, dt, body, way, clear, free, ex
     if others.shape[0] and awake.shape[0]:
         against = np.zeros(free.shape[0], np.bool_)
         against[awake] = True
-        found = _touching(others, play, 1.0, dt, body, way, free, free, against, table, parts[:, 0:3],
+        found = _touching(others, play, 1.0, dt, body, way, free, free, against, regions, parts[:, 0:3],
                           _grown(parts[:, 3:6], parts[:, 6:9], ahead, others, 1.0, dt))
         k = 0
         for i in range(count):
@@ -520,18 +523,18 @@ def _look(tick, whole, rows, pulled, awake, play, dt, body, way, clear, free, ex
         return due, back, ok, still, near, now
     for i in range(m):
         n = look[i]
-        now[i] = field_at(positions[n, 0], positions[n, 1], positions[n, 2], table)
+        now[i] = field_at(positions[n, 0], positions[n, 1], positions[n, 2], regions)
     everyone = np.ones(free.shape[0], np.bool_)
     # LONG look-aheads forward first, then what that finds near, or off its belt, one forward.
-    ok, still, stays = _on_belt(look, now, float(LONG), dt, body, way, table)
-    near = _near(look, float(LONG), play, dt, body, way, free, everyone, table, parts, fixed)
+    ok, still, stays = _on_belt(look, now, float(LONG), dt, body, way, regions)
+    near = _near(look, float(LONG), play, dt, body, way, free, everyone, regions, parts, fixed)
     for i in range(m):
         clear[look[i]] = tick + LONG * ahead[look[i]]
     short = np.flatnonzero(~ok | ~stays | near)
     if short.shape[0]:
         these = look[short]
-        ok1, still1, _ = _on_belt(these, now[short], 1.0, dt, body, way, table)
-        near1 = _near(these, 1.0, play, dt, body, way, free, everyone, table, parts, fixed)
+        ok1, still1, _ = _on_belt(these, now[short], 1.0, dt, body, way, regions)
+        near1 = _near(these, 1.0, play, dt, body, way, free, everyone, regions, parts, fixed)
         for j in range(short.shape[0]):
             i = short[j]
             ok[i], still[i], near[i] = ok1[j], still1[j], near1[j]
@@ -540,27 +543,28 @@ def _look(tick, whole, rows, pulled, awake, play, dt, body, way, clear, free, ex
 
 
 @njit(cache=True)
-def _near(rows, times, play, dt, body, way, free, against, table, parts, fixed):
+def _near(rows, times, play, dt, body, way, free, against, regions, parts, fixed):
     """`_touching` or `_fixed_hit`, for `_look`."""
-    near = _touching(rows, play, times, dt, body, way, free, free, against, table, parts[:, 0:3],
+    near = _touching(rows, play, times, dt, body, way, free, free, against, regions, parts[:, 0:3],
                      _grown(parts[:, 3:6], parts[:, 6:9], way.ahead, rows, times, dt))
     if fixed.boxes.shape[0]:
-        near = near | _fixed_hit(rows, times, dt, body, way, table, fixed)
+        near = near | _fixed_hit(rows, times, dt, body, way, regions, fixed)
     return near
 
 
 @njit(cache=True)
-def _leave(rows, pulled, play, dt, body, way, free, joined, explicit, table, parts, fixed):
+def _leave(rows, pulled, play, dt, body, way, free, joined, explicit, regions, parts, fixed):
     """FreeTransport._leaving in one call: every pull afresh (`_pulls`, for `pulled`), then of
     `rows` those steady (upright, tilt under TILT, spin under SPIN, vertical speed under RISE, or
     free) with their base on a belt's surface, on it 2 ×
     their look-ahead forward (`_on_belt`), and touching nothing then (`_touching`, `_fixed_hit`):
     masks over `rows` of those that go and those near something."""
+    table = regions.table
     positions, orientations, velocities = body.positions, body.orientations, body.velocities
     spins, half_heights, ahead = body.spins, body.half_heights, way.ahead
     way.most[:] = 0.0
     if pulled.shape[0]:
-        _pulls(pulled, dt, explicit, body, way, table)
+        _pulls(pulled, dt, explicit, body, way, regions)
     count = rows.shape[0]
     tilt = math.cos(TILT)
     riding = np.zeros(count, np.bool_)
@@ -571,20 +575,20 @@ def _leave(rows, pulled, play, dt, body, way, free, joined, explicit, table, par
         if not (free[n] or (1.0 - 2.0 * (x * x + y * y) > tilt and w[0] * w[0] + w[1] * w[1] + w[2] * w[2] < SPIN * SPIN
                             and abs(velocities[n, 2]) < RISE)):
             continue
-        k = field_at(positions[n, 0], positions[n, 1], positions[n, 2], table)
+        k = field_at(positions[n, 0], positions[n, 1], positions[n, 2], regions)
         if k >= 0 and abs(positions[n, 2] - half_heights[n] - table[k, HEIGHT]) < SINK:
             riding[i], field[i] = True, k
     these = rows[riding]
-    ok = _on_belt(these, field[riding], 2.0, dt, body, way, table)[0]
+    ok = _on_belt(these, field[riding], 2.0, dt, body, way, regions)[0]
     go, near = np.zeros(count, np.bool_), np.zeros(count, np.bool_)
     these = these[ok]
     if these.shape[0] == 0:
         return go, near
-    close = _touching(these, play, 2.0, dt, body, way, free, joined, np.ones(free.shape[0], np.bool_), table,
+    close = _touching(these, play, 2.0, dt, body, way, free, joined, np.ones(free.shape[0], np.bool_), regions,
                       parts[:, 0:3], _grown(parts[:, 3:6], parts[:, 6:9], ahead, these, 2.0, dt))
     if fixed.boxes.shape[0] and not close.all():
         rest = these[~close]
-        hit = _fixed_hit(rest, 2.0, dt, body, way, table, fixed)
+        hit = _fixed_hit(rest, 2.0, dt, body, way, regions, fixed)
         k = 0
         for j in range(close.shape[0]):
             if not close[j]:
@@ -600,63 +604,10 @@ _NO_PARTS = np.zeros((0, 9))   # moving parts' boxes: centre, half extents, grow
 
 
 def with_grid(table: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The fixed boxes as Fixed holds them: `table` (centre, half extents, cos
-    and sin of the yaw, a row each) and a grid over the floor of square cells (CELL, or larger
-    where the floor would have more than CELLS), each cell listing the boxes whose bounding
-    rectangle covers it, so that a bottle's tests look at the boxes near it, not at all of a
-    hall's. The grid is one int64 array: the first cell's indices (x, y), the cells across (x,
-    y), the boxes, the cell size in µm; then each box's first and last cell (x, x, y, y); then
-    where each cell's list begins (cells + 1); then the lists."""
-    m = table.shape[0]
-    if m == 0:
-        return table, np.array([0, 0, 0, 0, 0, round(CELL * 1e6)], np.int64)
-    cx, cy, hx, hy, cos, sin = table[:, 0], table[:, 1], table[:, 3], table[:, 4], table[:, 6], table[:, 7]
-    ex, ey = np.abs(cos) * hx + np.abs(sin) * hy, np.abs(sin) * hx + np.abs(cos) * hy
-    span = max(float((cx + ex).max() - (cx - ex).min()), float((cy + ey).max() - (cy - ey).min()))
-    cell = max(CELL, span / math.sqrt(CELLS) * 1.01)
-    um = round(cell * 1e6)
-    cell = um / 1e6
-    lo_x, hi_x = np.floor((cx - ex) / cell).astype(np.int64), np.floor((cx + ex) / cell).astype(np.int64)
-    lo_y, hi_y = np.floor((cy - ey) / cell).astype(np.int64), np.floor((cy + ey) / cell).astype(np.int64)
-    x0, y0 = int(lo_x.min()), int(lo_y.min())
-    nx, ny = int(hi_x.max()) - x0 + 1, int(hi_y.max()) - y0 + 1
-    ranges = np.column_stack((lo_x - x0, hi_x - x0, lo_y - y0, hi_y - y0))
-    lists = [[] for _ in range(nx * ny)]
-    for k, (ax, bx, ay, by) in enumerate(ranges.tolist()):
-        for i in range(ax, bx + 1):
-            for j in range(ay, by + 1):
-                lists[j * nx + i].append(k)
-    starts = np.cumsum([0] + [len(cell_list) for cell_list in lists])
-    items = [k for cell_list in lists for k in cell_list]
-    grid = np.concatenate(([x0, y0, nx, ny, m, um], ranges.ravel(), starts, items)).astype(np.int64)
-    return table, grid
-
-
-@njit(cache=True)
-def _in_cells(grid, x_lo, x_hi, y_lo, y_hi, found):
-    """The boxes (the grid of `with_grid`) listed in the cells the rectangle [x_lo, x_hi] × [y_lo, y_hi]
-    covers, each once (at the first of its cells in the rectangle), into `found` in the table's
-    order; returns how many."""
-    x0, y0, nx, ny, m, cell = grid[0], grid[1], grid[2], grid[3], grid[4], grid[5] / 1e6
-    if nx == 0:
-        return 0
-    i_lo = max(0, int(math.floor(x_lo / cell)) - x0)
-    i_hi = min(nx - 1, int(math.floor(x_hi / cell)) - x0)
-    j_lo = max(0, int(math.floor(y_lo / cell)) - y0)
-    j_hi = min(ny - 1, int(math.floor(y_hi / cell)) - y0)
-    ranges, starts = 6, 6 + 4 * m
-    items = starts + nx * ny + 1
-    count = 0
-    for j in range(j_lo, j_hi + 1):
-        for i in range(i_lo, i_hi + 1):
-            at = j * nx + i
-            for s in range(grid[starts + at], grid[starts + at + 1]):
-                k = grid[items + s]
-                if max(grid[ranges + 4 * k], i_lo) == i and max(grid[ranges + 4 * k + 2], j_lo) == j:
-                    found[count] = k
-                    count += 1
-    found[:count] = np.sort(found[:count])   # in the table's order, as a walk over every box finds them
-    return count
+    """The fixed boxes as Fixed holds them: `table` (centre, half extents, cos and sin of the
+    yaw, a row each) and its grid (hub/physics/grid.py), so that a bottle's tests look at the
+    boxes near it, not at all of a hall's."""
+    return table, grid_of(table)
 
 
 _NO_BOXES = with_grid(np.zeros((0, 8)))   # fixed boxes: their table and grid (with_grid, Fixed)

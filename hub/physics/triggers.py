@@ -8,6 +8,10 @@ from numba import njit
 
 from hub.core import state
 from hub.physics.frames import Boxes
+from hub.physics.grid import at_point, grid_of
+
+#: m a trigger's box is widened by in its grid beyond the widest body's radius, against rounding
+BOUNDS_MARGIN = 1e-6
 
 
 @state.value   # taken and replaced at each point: saved whole
@@ -32,7 +36,7 @@ class VolumeTriggers:
     and leaves between two communication points still produces both events.
     """
 
-    STATE = ("boxes", "latches", "_inside", "_stayed", "_occupants", "shifted")   # boxes move with an arm's tool
+    STATE = ("boxes", "latches", "_inside", "_held", "_within", "_stayed", "_occupants", "shifted")   # boxes move with an arm's tool
 
     def __init__(self):
         self.boxes = Boxes()
@@ -41,6 +45,10 @@ class VolumeTriggers:
         self._stayed = np.zeros(0, bool)      # per trigger: something was inside since the last take
         self._occupants = None                # per trigger: the bodies inside now, worked out once per change
         self.shifted: set[int] = set()        # boxes moved since the last evaluation (see `move`)
+        self._held = np.zeros(0, np.int64)    # per trigger: the bodies inside it now
+        self._within = np.zeros(0, np.int64)  # per body: the triggers it is inside now
+        self._mobile: set[int] = set()        # triggers that have moved (`move`): not in the grid
+        self._made = None                     # the grid and what it was made of (`_grid`)
 
     def __len__(self) -> int:
         return len(self.boxes)
@@ -49,6 +57,7 @@ class VolumeTriggers:
         index = self.boxes.add(center, half_extents, yaw)
         self.latches.append(Latch())
         self._inside = np.zeros((len(self.boxes), self._inside.shape[1]), bool)
+        self._held, self._within = np.zeros(len(self.boxes), np.int64), np.zeros(self._inside.shape[1], np.int64)
         self._stayed = np.append(self._stayed, False)
         self._occupants = None
         return index
@@ -89,8 +98,10 @@ class VolumeTriggers:
                 shifted[sorted(self.shifted)] = True
                 self.shifted.clear()
             every = np.arange(len(positions)) if rows is None else np.asarray(rows, np.int64)
-            changes = _moved(self._inside, self._stayed, np.asarray(moved, np.int64), every, shifted, positions, radii,
-                             half_heights, b.centers, b.half_extents, b.cos, b.sin)
+            grid, mobile = self._grid(radii)
+            changes = _moved(self._inside, self._stayed, self._held, self._within, np.asarray(moved, np.int64), every,
+                             shifted, positions, radii, half_heights, b.centers, b.half_extents, b.cos, b.sin, grid,
+                             mobile)
             if len(changes) == 0:
                 return False
             self._occupants = None
@@ -105,6 +116,7 @@ class VolumeTriggers:
         self.shifted.clear()
         previous = self._inside
         self._inside = inside
+        self._held, self._within = inside.sum(axis=1), inside.sum(axis=0)
         self._stayed |= inside.any(axis=1)
         if previous.shape != inside.shape:
             previous = np.zeros_like(inside)
@@ -135,6 +147,23 @@ class VolumeTriggers:
         """Put a box's centre elsewhere (a gripper's trigger follows the tool)."""
         self.boxes.centers[trigger] = center
         self.shifted.add(trigger)
+        self._mobile.add(trigger)
+
+    def _grid(self, radii: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The grid of the triggers that never moved (hub/physics/grid.py), each box widened by the
+        widest body's radius, and the numbers of those that did (`_moved` tests these against
+        every moved body). Made again when a trigger is added or moves for the first time, when a
+        box is not where the grid has it (a restored checkpoint), or for a wider body. Not state:
+        it follows from the boxes."""
+        b, reach = self.boxes, (float(radii.max()) if len(radii) else 0.0) + BOUNDS_MARGIN
+        made = self._made
+        if (made is None or made[0] != self._mobile or reach > made[1] or len(made[2]) + len(made[4]) != len(self)
+                or not np.array_equal(made[3], b.centers[made[2]])):
+            mobile = np.array(sorted(self._mobile), np.int64)
+            still = np.setdiff1d(np.arange(len(self)), mobile)
+            grid = still_grid(b.centers, b.half_extents, b.cos, b.sin, mobile, reach)
+            self._made = (set(self._mobile), reach, still, b.centers[still], mobile, grid)
+        return self._made[5], self._made[4]
 
     def take(self, trigger: int) -> Latch:
         """Hand over what the trigger latched and start a new latch with the current occupancy."""
@@ -144,13 +173,23 @@ class VolumeTriggers:
         if self._occupants is None:
             # One pass over all triggers, reused by every take until the occupancy changes: a
             # plant takes each of its ~20 triggers at every communication point.
-            occupants = [[] for _ in range(len(self))]
-            for t, n in zip(*(a.tolist() for a in np.nonzero(self._inside))):
-                occupants[t].append(n)
-            self._occupants = [tuple(o) for o in occupants]
+            occupants = [()] * len(self)
+            for t in np.flatnonzero(self._held).tolist():
+                occupants[t] = tuple(np.flatnonzero(self._inside[t]).tolist())
+            self._occupants = occupants
         latch.inside = self._occupants[trigger]
         self.latches[trigger] = Latch()
         return latch
+
+
+def still_grid(centers, half_extents, cos, sin, mobile: np.ndarray, reach: float) -> np.ndarray:
+    """The grid (hub/physics/grid.py) of the triggers but the `mobile`, each box widened by `reach`
+    across, its lists naming the triggers."""
+    still = np.setdiff1d(np.arange(len(centers)), mobile)
+    grid = grid_of(np.column_stack((centers, half_extents + [reach, reach, 0.0], cos, sin))[still])
+    items = 6 + 4 * len(still) + grid[2] * grid[3] + 1
+    grid[items:] = still[grid[items:]]
+    return grid
 
 
 @njit(cache=True)
@@ -181,30 +220,67 @@ def _inside(px, py, pz, r, h, cx, cy, cz, hx, hy, hz, c, s):
 
 
 @njit(cache=True)
-def _moved(inside, stayed, moved, every, shifted, positions, radii, half_heights, centers, half_extents, cos, sin):
+def _moved(inside, stayed, held, within, moved, every, shifted, positions, radii, half_heights, centers,
+           half_extents, cos, sin, grid, mobile):
     """One tick's occupancy in place: each trigger against the `moved` bodies (the others keep
     theirs), or, if it was `shifted`, against `every` body in play; then whether anything is
     inside it now (`stayed`). The changes, (trigger, body, entered) each, trigger by trigger and
-    within one the bodies that entered in body order, then those that left."""
-    changes = []
+    within one the bodies that entered in body order, then those that left.
+
+    `held` (per trigger) and `within` (per body) count the pairs inside, kept up to date here. A
+    moved body is tested against the triggers it was inside, those `mobile` (moved with an arm's
+    tool) and those its cell of `grid` lists (VolumeTriggers._grid: the others, the triggers
+    too far to reach it, would find it outside as before): the result of testing every pair, at
+    a cost that grows with the bodies, not with bodies × triggers."""
+    n_bodies = inside.shape[1]
+    keys = [np.int64(k) for k in range(0)]   # t·2N + n for an entry, t·2N + N + n for a leave
+    reach = (radii.max() if radii.shape[0] else 0.0) + BOUNDS_MARGIN
     for t in range(inside.shape[0]):
-        cx, cy, cz = centers[t, 0], centers[t, 1], centers[t, 2]
-        hx, hy, hz = half_extents[t, 0], half_extents[t, 1], half_extents[t, 2]
-        c, s = cos[t], sin[t]
-        left = []
-        for n in (every if shifted[t] else moved):
-            now = _inside(positions[n, 0], positions[n, 1], positions[n, 2], radii[n], half_heights[n],
-                          cx, cy, cz, hx, hy, hz, c, s)
-            if now != inside[t, n]:
-                inside[t, n] = now
-                if now:
-                    changes.append((t, n, 1))
-                else:
-                    left.append((t, n, 0))
-        for change in left:
-            changes.append(change)
-        for n in range(inside.shape[1]):
-            if inside[t, n]:
-                stayed[t] = True
-                break
-    return np.array(changes, np.int64).reshape(-1, 3) if changes else np.zeros((0, 3), np.int64)
+        if shifted[t]:   # the box's bounds first: a body beyond them is not inside (and was not, or is tested)
+            ex = abs(cos[t]) * half_extents[t, 0] + abs(sin[t]) * half_extents[t, 1] + reach
+            ey = abs(sin[t]) * half_extents[t, 0] + abs(cos[t]) * half_extents[t, 1] + reach
+            for n in every:
+                if inside[t, n] or (abs(positions[n, 0] - centers[t, 0]) <= ex
+                                    and abs(positions[n, 1] - centers[t, 1]) <= ey):
+                    _flip(keys, inside, held, within, t, n, positions, radii, half_heights, centers, half_extents,
+                          cos, sin)
+    held_now = np.flatnonzero(held)   # a body inside a trigger is inside one of these
+    for n in moved:
+        if within[n]:   # first the triggers it was inside: those it left
+            for t in held_now:
+                if inside[t, n] and not shifted[t]:
+                    _flip(keys, inside, held, within, t, n, positions, radii, half_heights, centers, half_extents,
+                          cos, sin)
+        first, last = at_point(grid, positions[n, 0], positions[n, 1])
+        for s in range(first, last):
+            if not inside[grid[s], n] and not shifted[grid[s]]:
+                _flip(keys, inside, held, within, grid[s], n, positions, radii, half_heights, centers,
+                      half_extents, cos, sin)
+        for t in mobile:
+            if not inside[t, n] and not shifted[t]:
+                _flip(keys, inside, held, within, t, n, positions, radii, half_heights, centers, half_extents,
+                      cos, sin)
+    for t in range(inside.shape[0]):
+        if held[t]:
+            stayed[t] = True
+    keys.sort()
+    out = np.empty((len(keys), 3), np.int64)
+    for i in range(len(keys)):
+        t, rest = divmod(keys[i], 2 * n_bodies)
+        out[i, 0], out[i, 1], out[i, 2] = t, rest % n_bodies, 1 if rest < n_bodies else 0
+    return out
+
+
+@njit(cache=True)
+def _flip(keys, inside, held, within, t, n, positions, radii, half_heights, centers, half_extents, cos, sin):
+    """Test one pair (`_moved`); if its occupancy changed, set it, count it and add its key."""
+    now = _inside(positions[n, 0], positions[n, 1], positions[n, 2], radii[n], half_heights[n],
+                  centers[t, 0], centers[t, 1], centers[t, 2], half_extents[t, 0], half_extents[t, 1],
+                  half_extents[t, 2], cos[t], sin[t])
+    if now != inside[t, n]:
+        inside[t, n] = now
+        change = 1 if now else -1
+        held[t] += change
+        within[n] += change
+        n_bodies = inside.shape[1]
+        keys.append(np.int64(t * 2 * n_bodies + (n if now else n_bodies + n)))

@@ -25,7 +25,7 @@ from hub.core import state
 from hub.core.errors import CheckpointError
 from hub.core.files import written
 
-FORMAT = 1
+FORMAT = 2
 MAGIC = b"planthub checkpoint\n"
 #: Object parameters that may differ between the run that saved and the one that resumes: where
 #: logic runs (in the hub, in a child process, over the bus) changes no result, nor does whether

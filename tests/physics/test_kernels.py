@@ -45,11 +45,14 @@ def close(a, b, scale=1.0) -> bool:
 
 
 # --- random scenes ---------------------------------------------------------------------------
-def belts(rng, explicit=False) -> ForceFields:
-    """Two to five belts, straights and arcs, overlapping near the origin, of every grip and law."""
+def belts(rng, explicit=False, hall=False) -> ForceFields:
+    """Two to five belts, straights and arcs, overlapping near the origin, of every grip and law;
+    in a `hall`, as many again spread over 8 m, so that a point's cell of the regions' grid lists
+    a few of them (hub/physics/grid.py)."""
     fields = ForceFields(DT, "explicit" if explicit else "exact")
-    for _ in range(rng.integers(2, 6)):
-        start = Pose(*rng.uniform(-0.6, 0.1, 2), rng.uniform(-0.01, 0.01), rng.uniform(-math.pi, math.pi))
+    for b in range(rng.integers(2, 6) * (2 if hall else 1)):
+        far = rng.uniform(-4.0, 4.0, 2) if hall and b % 2 else np.zeros(2)
+        start = Pose(*(rng.uniform(-0.6, 0.1, 2) + far), rng.uniform(-0.01, 0.01), rng.uniform(-math.pi, math.pi))
         line = (Arc(start, rng.uniform(0.2, 0.8), rng.uniform(0.5, 3.0), int(rng.choice([-1, 1])))
                 if rng.random() < 0.35 else Straight(start, rng.uniform(0.3, 1.5)))
         fields.add_region(line, rng.uniform(0.03, 0.2), start.z - 0.03, start.z + 0.12, rng.uniform(1.0, 40.0),
@@ -99,8 +102,8 @@ def fixed_table(c, h, cos, sin):
     return T.with_grid(np.column_stack((c, h, cos, sin)))
 
 
-def yawed_boxes(rng, m):
-    c = np.column_stack((rng.uniform(-0.6, 0.6, (m, 2)), rng.uniform(0.0, 0.1, m)))
+def yawed_boxes(rng, m, spread=0.6):
+    c = np.column_stack((rng.uniform(-spread, spread, (m, 2)), rng.uniform(0.0, 0.1, m)))
     h = np.column_stack((rng.uniform(0.002, 0.3, m), rng.uniform(0.002, 0.05, m), rng.uniform(0.02, 0.06, m)))
     yaw = rng.uniform(-math.pi, math.pi, m)
     return c, h, np.cos(yaw), np.sin(yaw)
@@ -111,8 +114,10 @@ def yawed_boxes(rng, m):
 @given(seeds)
 def test_the_field_a_point_lies_in_is_the_one_the_centre_lines_say(seed):
     rng = np.random.default_rng(seed)
-    fields = belts(rng)
-    points = np.column_stack((rng.uniform(-1.5, 1.5, (200, 2)), rng.uniform(-0.05, 0.15, 200)))
+    hall = rng.random() < 0.5
+    fields = belts(rng, hall=hall)
+    spread = 5.0 if hall else 1.5
+    points = np.column_stack((rng.uniform(-spread, spread, (400, 2)), rng.uniform(-0.05, 0.15, 400)))
     assert (fields.which(points) == ref.field_of(fields, points)).all()
 
 
@@ -169,22 +174,33 @@ def test_a_trigger_holds_the_upright_cylinders_that_overlap_its_box(seed):
 @SETTINGS
 @given(seeds)
 def test_a_ticks_occupancy_lists_who_entered_and_left_each_trigger(seed):
+    """Near the origin, or spread over a hall (the kernel looks a body up in a grid of the boxes
+    that never moved, hub/physics/grid.py: there some bodies stand near a box, most far from every
+    box, some off the grid)."""
     rng = np.random.default_rng(seed)
-    b = bodies(rng, 30)
-    c, h, cos, sin = yawed_boxes(rng, 6)
+    hall = rng.random() < 0.5
+    b = bodies(rng, 30, 8.0 if hall else 0.5)
+    c, h, cos, sin = yawed_boxes(rng, 6, 6.0 if hall else 0.6)
+    if hall:
+        near = rng.random(30) < 0.5
+        b["positions"][near, :2] = c[rng.integers(0, 6, near.sum()), :2] + rng.uniform(-0.3, 0.3, (near.sum(), 2))
     before = rng.random((6, 30)) < 0.3
     moved = np.sort(rng.choice(30, rng.integers(0, 30), replace=False)).astype(np.int64)
     shifted = rng.random(6) < 0.3
     every = np.arange(30, dtype=np.int64)
     inside, stayed = before.copy(), np.zeros(6, bool)
-    changes = G._moved(inside, stayed, moved, every, shifted, b["positions"], b["radii"], b["half_heights"],
-                       c, h, cos, sin)
+    held, within = before.sum(axis=1), before.sum(axis=0)
+    mobile = np.flatnonzero(shifted | (rng.random(6) < 0.2))   # moved once, or this tick
+    grid = G.still_grid(c, h, cos, sin, mobile, b["radii"].max() + G.BOUNDS_MARGIN)
+    changes = G._moved(inside, stayed, held, within, moved, every, shifted, b["positions"], b["radii"],
+                       b["half_heights"], c, h, cos, sin, grid, mobile)
     now = ref.inside(b["positions"], b["radii"], b["half_heights"], c, h, cos, sin)
     looked = np.zeros((6, 30), bool)
     looked[:, moved] = True
     looked[shifted] = True
     expected_inside = np.where(looked, now, before)
     assert (inside == expected_inside).all() and (stayed == expected_inside.any(axis=1)).all()
+    assert (held == expected_inside.sum(axis=1)).all() and (within == expected_inside.sum(axis=0)).all()
     expected = []
     for t in range(6):
         flip = np.flatnonzero(expected_inside[t] != before[t])
@@ -326,7 +342,7 @@ def test_a_bottles_way_reaches_a_fixed_box_as_against_every_box(seed, times, fas
     for n in range(30):
         T._relist(n, body(b, listed_at), T.Fixed(*fixed_table(c, h, cos, sin), listed_at.copy(), near, count))
     rows = np.arange(30, dtype=np.int64)
-    got = T._fixed_hit(rows, times, DT, body(b), way(b["ahead"], b["pulls"]), fields.table(),
+    got = T._fixed_hit(rows, times, DT, body(b), way(b["ahead"], b["pulls"]), fields.regions(),
                        T.Fixed(*fixed_table(c, h, cos, sin), listed_at, near, count))
     expected = ref.fixed_hit(fields, rows, times, DT, p, v, b["pulls"], b["ahead"], b["radii"], b["half_heights"],
                              c, h, cos, sin)
@@ -349,7 +365,7 @@ def test_whether_a_bottle_rides_on_its_belt_over_a_look(seed, times):
     p, v, ahead = b["positions"], b["velocities"], b["ahead"]
     rows = np.arange(30, dtype=np.int64)
     now = fields.which(p)
-    ok, still, stays = T._on_belt(rows, now, times, DT, body(b), way(ahead, b["pulls"]), fields.table())
+    ok, still, stays = T._on_belt(rows, now, times, DT, body(b), way(ahead, b["pulls"]), fields.regions())
     for n in rows:
         k, m = now[n], ahead[n] * times
         there_point = p[n] + v[n] * (m * DT)
@@ -360,7 +376,7 @@ def test_whether_a_bottle_rides_on_its_belt_over_a_look(seed, times):
         assert stays[n] == (riding and there == k and ref.field_of(fields, pulled)[0] == k)
         assert still[n] == (riding and ref.still_on(fields.speeds[k], v[n]))
         assert ok[n] == (riding and not still[n])
-        assert T._belt(n, m, DT, body(b), way(ahead, b["pulls"]), fields.table()) == ref.on_one_belt(
+        assert T._belt(n, m, DT, body(b), way(ahead, b["pulls"]), fields.regions()) == ref.on_one_belt(
             fields, n, m, DT, p, v, b["pulls"])
 
 
@@ -372,7 +388,7 @@ def test_a_bodys_pull_is_its_belts_law_now_and_its_most_the_largest_on_its_way(s
     p, v, ahead = b["positions"], b["velocities"], b["ahead"]
     rows = np.sort(rng.choice(30, 20, replace=False)).astype(np.int64)
     pulls, most = np.full((30, 2), 7.0), np.zeros(30)
-    T._pulls(rows, DT, fields.explicit, body(b), way(ahead, pulls, most), fields.table())
+    T._pulls(rows, DT, fields.explicit, body(b), way(ahead, pulls, most), fields.regions())
     for n in range(30):
         if n not in rows:
             assert (pulls[n] == 7.0).all() and most[n] == 0.0    # untouched
@@ -395,7 +411,7 @@ def test_a_free_bottle_moves_one_tick_by_its_belts_law_then_x_plus_v_dt(seed):
     offsets = np.where(rng.random(30) < 0.3, rng.uniform(0.03, 0.06, 30), 0.0)
     rows = np.sort(rng.choice(30, 20, replace=False)).astype(np.int64)
     p, v = b["positions"].copy(), b["velocities"].copy()
-    T._advance(rows, p, b["orientations"], v, b["masses"], offsets, DT, fields.explicit, fields.table())
+    T._advance(rows, p, b["orientations"], v, b["masses"], offsets, DT, fields.explicit, *fields.regions())
     for n in range(30):
         if n not in rows:
             assert (p[n] == b["positions"][n]).all() and (v[n] == b["velocities"][n]).all()
@@ -428,10 +444,10 @@ def test_the_bodies_a_free_bottle_could_touch_are_found_by_every_pair_alike(seed
     against = np.zeros(40, bool)
     against[play[rng.random(len(play)) < 0.7]] = True
     pulls, most = np.zeros((40, 2)), np.zeros(40)
-    T._pulls(play, DT, fields.explicit, body(b), way(b["ahead"], pulls, most), fields.table())
+    T._pulls(play, DT, fields.explicit, body(b), way(b["ahead"], pulls, most), fields.regions())
     parts = (rng.uniform(-0.4, 0.4, (2, 3)), rng.uniform(0.005, 0.05, (2, 3)))
     got = T._touching(rows, play, times, DT, body(b), way(b["ahead"], pulls, most), free, joined, against,
-                      fields.table(), *parts)
+                      fields.regions(), *parts)
     expected = ref.touching(fields, rows, play, times, DT, p, b["orientations"], v, b["spins"], b["radii"],
                             b["half_heights"], b["ahead"], most, pulls, free, joined, against, *parts)
     assert (got == expected).all(), np.flatnonzero(got != expected)
@@ -483,7 +499,7 @@ def look_scene(rng):
     b["positions"][:, 2] = rng.choice([0.0, 0.005], 30) + b["half_heights"] + rng.uniform(-0.008, 0.008, 30)
     b["play"] = np.sort(rng.choice(30, 26, replace=False)).astype(np.int64)
     b["pulls"], b["most"] = np.zeros((30, 2)), np.zeros(30)
-    T._pulls(b["play"], DT, fields.explicit, body(b), way(b["ahead"], b["pulls"], b["most"]), fields.table())
+    T._pulls(b["play"], DT, fields.explicit, body(b), way(b["ahead"], b["pulls"], b["most"]), fields.regions())
     c, h, cos, sin = yawed_boxes(rng, int(rng.integers(1, 12)))
     lists = (b["positions"].copy(), np.zeros((30, T.NEAR), np.int64), np.zeros(30, np.int64))
     for n in range(30):
@@ -506,7 +522,7 @@ def test_which_awake_bottles_leave_the_engine(seed):
     joined = free | (rng.random(30) < 0.2)
     rows = b["play"][rng.random(len(b["play"])) < 0.6]
     bodies_, look = kernel_state(b)
-    go, near = T._leave(rows, b["play"], b["play"], DT, bodies_, look, free, joined, fields.explicit, fields.table(),
+    go, near = T._leave(rows, b["play"], b["play"], DT, bodies_, look, free, joined, fields.explicit, fields.regions(),
                         np.hstack(parts), T.Fixed(*fixed_table(*fixed), *lists))
     assert (look.most == b["most"]).all() and (look.pulls == b["pulls"]).all()   # taken afresh: the same again
     expected = ref.leave(fields, rows, DT, b, free, joined, parts, fixed)
@@ -527,7 +543,7 @@ def test_a_look_at_the_free_bottles(seed, whole):
     bodies_, look = kernel_state(b)
     got_clear = clear.copy()
     got = T._look(tick, whole, rows, b["play"], awake, b["play"], DT, bodies_, look, got_clear, free, fields.explicit,
-                  fields.table(), np.hstack(parts), T.Fixed(*fixed_table(*fixed), *lists))
+                  fields.regions(), np.hstack(parts), T.Fixed(*fixed_table(*fixed), *lists))
     expected = ref.look(fields, tick, whole, rows, awake, DT, b, clear, free, parts, fixed)
     for name, a, e in zip(("due", "back", "ok", "still", "near", "now"), got, expected):
         assert (a == e).all(), (name, a, e)
