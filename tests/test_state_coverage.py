@@ -47,6 +47,12 @@ NOT_STATE = {
     ("hub.view.broadcast.Broadcast", "_next_poll"): "a wall-clock time to look at the bus again",
     ("hub.view.broadcast.Broadcast", "_tick"): "the last point sent to views, to send its figures again as the "
                                                "run ends: what views were told, set again at the next point",
+    ("hub.physics.fields.ForceFields", "_regions"): "the belts' table (saved) with its grid, made from it when first "
+                                                    "asked",
+    ("hub.physics.triggers.VolumeTriggers", "_made"): "the triggers' grid, made again whenever a box is not where it "
+                                                      "has it (hub/physics/triggers.py, _grid)",
+    ("hub.physics.triggers.VolumeTriggers", "_mobile"): "which triggers moved, kept out of the grid so that it is not "
+                                                        "made again at every tick: the grid's results are the same",
     ("hub.bus.lockstep.Lockstep", "tick"): _SESSION,
     ("hub.logic.remote.RemoteSlave", "sent"): _SESSION,
     **{("hub.bus.lockstep._Peer", name): _SESSION for name in ("from_tick", "pending", "result", "result_n", "sent_at")},
