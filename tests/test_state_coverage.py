@@ -49,8 +49,8 @@ NOT_STATE = {
                                                "run ends: what views were told, set again at the next point",
     ("hub.physics.fields.ForceFields", "_regions"): "the belts' table (saved) with its grid, made from it when first "
                                                     "asked",
-    ("hub.physics.triggers.VolumeTriggers", "_made"): "the triggers' grid, made again whenever a box is not where it "
-                                                      "has it (hub/physics/triggers.py, _grid)",
+    ("hub.physics.triggers.VolumeTriggers", "_made"): "the triggers' grid, made from the boxes at the first tick "
+                                                      "after a restore (hub/physics/triggers.py, _grid)",
     ("hub.physics.triggers.VolumeTriggers", "_mobile"): "which triggers moved, kept out of the grid so that it is not "
                                                         "made again at every tick: the grid's results are the same",
     ("hub.bus.lockstep.Lockstep", "tick"): _SESSION,

@@ -58,6 +58,7 @@ class VolumeTriggers:
         self.latches.append(Latch())
         self._inside = np.zeros((len(self.boxes), self._inside.shape[1]), bool)
         self._held, self._within = np.zeros(len(self.boxes), np.int64), np.zeros(self._inside.shape[1], np.int64)
+        self._made = None
         self._stayed = np.append(self._stayed, False)
         self._occupants = None
         return index
@@ -152,18 +153,17 @@ class VolumeTriggers:
     def _grid(self, radii: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The grid of the triggers that never moved (hub/physics/grid.py), each box widened by the
         widest body's radius, and the numbers of those that did (`_moved` tests these against
-        every moved body). Made again when a trigger is added or moves for the first time, when a
-        box is not where the grid has it (a restored checkpoint), or for a wider body. Not state:
-        it follows from the boxes."""
-        b, reach = self.boxes, (float(radii.max()) if len(radii) else 0.0) + BOUNDS_MARGIN
+        every moved body). Made at the first tick that moves bodies, and again when a trigger is
+        added, moves for the first time or bodies are added. Not state: it follows from the boxes;
+        a checkpoint goes into a world freshly built, before this is first made."""
         made = self._made
-        if (made is None or made[0] != self._mobile or reach > made[1] or len(made[2]) + len(made[4]) != len(self)
-                or not np.array_equal(made[3], b.centers[made[2]])):
+        if made is None or made[0] != len(self._mobile) or made[1] != len(radii):
             mobile = np.array(sorted(self._mobile), np.int64)
-            still = np.setdiff1d(np.arange(len(self)), mobile)
-            grid = still_grid(b.centers, b.half_extents, b.cos, b.sin, mobile, reach)
-            self._made = (set(self._mobile), reach, still, b.centers[still], mobile, grid)
-        return self._made[5], self._made[4]
+            reach = (float(radii.max()) if len(radii) else 0.0) + BOUNDS_MARGIN
+            b = self.boxes
+            self._made = (len(self._mobile), len(radii), still_grid(b.centers, b.half_extents, b.cos, b.sin, mobile,
+                                                                    reach), mobile)
+        return self._made[2], self._made[3]
 
     def take(self, trigger: int) -> Latch:
         """Hand over what the trigger latched and start a new latch with the current occupancy."""
