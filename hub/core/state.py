@@ -20,6 +20,9 @@ its contents replaced. An attribute that holds another owner, or a list, tuple o
 them, is walked into rather than copied; a class marked `@value` (a trigger's latch, a joint
 motion: replaced whole, or held only at times) is saved whole instead.
 
+An owner that keeps something made from its state (a grid of its boxes) writes `restored()`,
+called once its state is back, to drop it.
+
 A class that talks to something outside Python (the engine, an FMU, a participant) writes
 `save_state() -> object` and `restore_state(state)`; its `STATE` still names the attributes of
 its own those cover, so that a reader sees in one place what changes while it runs.
@@ -77,6 +80,9 @@ def restore(owner, state, where: str = "") -> None:
                               f"{type(owner).__name__} has {sorted(names)}")
     for name in names:
         _put(owner, name, state[name], f"{where}.{name}")
+    restored = getattr(owner, "restored", None)
+    if restored is not None:
+        restored()
 
 
 def _saved(value):

@@ -8,7 +8,7 @@ import numpy as np
 from numba import njit
 
 from hub.physics.frames import TAU, Arc, CentreLines, Pose, Straight
-from hub.physics.grid import at_point, grid_of
+from hub.physics.grid import MARGIN, at_point, grid_of
 
 GRIPS = ("surface", "along")
 INTEGRATORS = ("exact", "explicit")
@@ -25,8 +25,6 @@ COLUMNS = 19
 #: The regions as `field_at` takes them: the table above and a grid of the regions' bounds
 #: (hub/physics/grid.py), so that finding the region under a point looks at the few near it.
 Regions = namedtuple("Regions", "table grid")
-#: m a region's bounds in its grid are widened by, against rounding
-BOUNDS_MARGIN = 1e-6
 
 
 class ForceFields:
@@ -146,7 +144,7 @@ class ForceFields:
         for every body that moves: one compiled loop, a fifth of the same test on numpy arrays)."""
         if len(self) == 0 or len(points) == 0:
             return np.full(len(points), -1)
-        return _nearest(np.ascontiguousarray(points, float), self.regions())
+        return _nearest(np.ascontiguousarray(points, float), *self.regions())
 
     def table(self) -> np.ndarray:
         """(regions, COLUMNS): every region's centre line, half width, heights and law, in the columns
@@ -174,9 +172,9 @@ class ForceFields:
         if self._regions is None or self._regions.table is not table:
             straight = table[:, ARC] == 0.0
             half = 0.5 * table[:, LENGTH] * straight
-            reach = np.where(straight, 0.0, table[:, RADIUS]) + table[:, HALF_WIDTH] + BOUNDS_MARGIN
+            reach = np.where(straight, 0.0, table[:, RADIUS]) + table[:, HALF_WIDTH] + MARGIN
             boxes = np.column_stack((table[:, OX] + half * table[:, COS], table[:, OY] + half * table[:, SIN],
-                                     np.zeros(len(table)), np.where(straight, half + BOUNDS_MARGIN, reach), reach,
+                                     np.zeros(len(table)), np.where(straight, half + MARGIN, reach), reach,
                                      np.zeros(len(table)), np.where(straight, table[:, COS], 1.0),
                                      np.where(straight, table[:, SIN], 0.0)))
             self._regions = Regions(table, grid_of(boxes))
@@ -242,8 +240,10 @@ class ForceFields:
 
 
 @njit(cache=True)
-def _nearest(points, regions):
-    """Per point (N,3): `field_at`."""
+def _nearest(points, table, grid):
+    """Per point (N,3): `field_at` (the regions' arrays given plain: it runs every tick, see
+    transport_kernels._advance)."""
+    regions = Regions(table, grid)
     out = np.empty(points.shape[0], np.int64)
     for i in range(points.shape[0]):
         out[i] = field_at(points[i, 0], points[i, 1], points[i, 2], regions)

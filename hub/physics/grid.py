@@ -17,6 +17,14 @@ from numba import njit
 
 CELL = 0.25           # m: the side of a cell, at least
 CELLS = 1 << 20       # cells a grid has at most: a larger floor gets larger cells
+MARGIN = 1e-6         # m a box's bounds are widened by where a test must find every box it can (rounding)
+
+
+@njit(cache=True)
+def extents(cos, sin, hx, hy):
+    """The half extents along x and y of the bounding rectangle of a box yawed by (cos, sin), of
+    half extents (hx, hy): for numbers or arrays."""
+    return np.abs(cos) * hx + np.abs(sin) * hy, np.abs(sin) * hx + np.abs(cos) * hy
 
 
 def grid_of(boxes: np.ndarray) -> np.ndarray:
@@ -24,8 +32,8 @@ def grid_of(boxes: np.ndarray) -> np.ndarray:
     m = boxes.shape[0]
     if m == 0:
         return np.array([0, 0, 0, 0, 0, round(CELL * 1e6)], np.int64)
-    cx, cy, hx, hy, cos, sin = boxes[:, 0], boxes[:, 1], boxes[:, 3], boxes[:, 4], boxes[:, 6], boxes[:, 7]
-    ex, ey = np.abs(cos) * hx + np.abs(sin) * hy, np.abs(sin) * hx + np.abs(cos) * hy
+    cx, cy = boxes[:, 0], boxes[:, 1]
+    ex, ey = extents(boxes[:, 6], boxes[:, 7], boxes[:, 3], boxes[:, 4])
     span = max(float((cx + ex).max() - (cx - ex).min()), float((cy + ey).max() - (cy - ey).min()))
     cell = max(CELL, span / math.sqrt(CELLS) * 1.01)
     um = round(cell * 1e6)
@@ -76,7 +84,7 @@ def at_point(grid, x, y):
     """Where the list of the cell holding the point (x, y) lies in `grid`: `grid[first:last]` are
     its boxes, in their order (first == last off the grid, or for a point that is not a number)."""
     x0, y0, nx, ny, m, cell = grid[0], grid[1], grid[2], grid[3], grid[4], grid[5] / 1e6
-    fx, fy = math.floor(x / cell) - x0, math.floor(y / cell) - y0
+    fx, fy = np.floor(x / cell) - x0, np.floor(y / cell) - y0   # floats: compared before made integers
     if not (0.0 <= fx < nx and 0.0 <= fy < ny):
         return 0, 0
     at = int(fy) * nx + int(fx)

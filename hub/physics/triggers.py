@@ -8,10 +8,7 @@ from numba import njit
 
 from hub.core import state
 from hub.physics.frames import Boxes
-from hub.physics.grid import at_point, grid_of
-
-#: m a trigger's box is widened by in its grid beyond the widest body's radius, against rounding
-BOUNDS_MARGIN = 1e-6
+from hub.physics.grid import MARGIN, at_point, extents, grid_of
 
 
 @state.value   # taken and replaced at each point: saved whole
@@ -87,7 +84,9 @@ class VolumeTriggers:
         `moved`: the only bodies that can have moved since the last evaluation (the others, at
         rest, keep their occupancy); None: any of `rows`.
 
-        Runs at every tick: the test is one compiled loop over (triggers, bodies) (`_overlap`)."""
+        Runs at every tick: the bodies that moved, in one compiled loop, each tested against the
+        triggers near it (`_moved`); after a park, an unpark or a body added, every body against
+        every trigger (`_overlap`)."""
         if len(self) == 0:
             return False
         if moved is not None and self._inside.shape == (len(self), len(positions)):
@@ -99,10 +98,10 @@ class VolumeTriggers:
                 shifted[sorted(self.shifted)] = True
                 self.shifted.clear()
             every = np.arange(len(positions)) if rows is None else np.asarray(rows, np.int64)
-            grid, mobile = self._grid(radii)
+            grid, still, mobile = self._grid(radii)
             changes = _moved(self._inside, self._stayed, self._held, self._within, np.asarray(moved, np.int64), every,
                              shifted, positions, radii, half_heights, b.centers, b.half_extents, b.cos, b.sin, grid,
-                             mobile)
+                             still, mobile)
             if len(changes) == 0:
                 return False
             self._occupants = None
@@ -150,20 +149,27 @@ class VolumeTriggers:
         self.shifted.add(trigger)
         self._mobile.add(trigger)
 
-    def _grid(self, radii: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The grid of the triggers that never moved (hub/physics/grid.py), each box widened by the
-        widest body's radius, and the numbers of those that did (`_moved` tests these against
-        every moved body). Made at the first tick that moves bodies, and again when a trigger is
-        added, moves for the first time or bodies are added. Not state: it follows from the boxes;
-        a checkpoint goes into a world freshly built, before this is first made."""
+    def _grid(self, radii: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The grid (hub/physics/grid.py) of the triggers that never moved, each box widened by the
+        widest body's radius (`reach`), with their numbers (the grid's boxes, in order), and the
+        numbers of those that did (`_moved` tests these against every moved body). Made at the
+        first tick that moves bodies, and again when a trigger is added or moves for the first
+        time, when bodies are added, or after a restore (`restored`). Not state: it follows from
+        the boxes."""
         made = self._made
         if made is None or made[0] != len(self._mobile) or made[1] != len(radii):
-            mobile = np.array(sorted(self._mobile), np.int64)
-            reach = (float(radii.max()) if len(radii) else 0.0) + BOUNDS_MARGIN
             b = self.boxes
-            self._made = (len(self._mobile), len(radii), still_grid(b.centers, b.half_extents, b.cos, b.sin, mobile,
-                                                                    reach), mobile)
-        return self._made[2], self._made[3]
+            mobile = np.array(sorted(self._mobile), np.int64)
+            still = np.setdiff1d(np.arange(len(self)), mobile)
+            widest = reach(radii)
+            widened = b.half_extents[still] + [widest, widest, 0.0]
+            grid = grid_of(np.column_stack((b.centers[still], widened, b.cos[still], b.sin[still])))
+            self._made = (len(self._mobile), len(radii), grid, still, mobile)
+        return self._made[2:]
+
+    def restored(self) -> None:
+        """After a checkpoint is put back (hub/core/state.py): the grid is made again from the boxes."""
+        self._made = None
 
     def take(self, trigger: int) -> Latch:
         """Hand over what the trigger latched and start a new latch with the current occupancy."""
@@ -182,14 +188,11 @@ class VolumeTriggers:
         return latch
 
 
-def still_grid(centers, half_extents, cos, sin, mobile: np.ndarray, reach: float) -> np.ndarray:
-    """The grid (hub/physics/grid.py) of the triggers but the `mobile`, each box widened by `reach`
-    across, its lists naming the triggers."""
-    still = np.setdiff1d(np.arange(len(centers)), mobile)
-    grid = grid_of(np.column_stack((centers, half_extents + [reach, reach, 0.0], cos, sin))[still])
-    items = 6 + 4 * len(still) + grid[2] * grid[3] + 1
-    grid[items:] = still[grid[items:]]
-    return grid
+@njit(cache=True)
+def reach(radii):
+    """How far beyond a box a body may stand and still overlap it: the widest body's radius, and
+    MARGIN against rounding."""
+    return (radii.max() if radii.shape[0] else 0.0) + MARGIN
 
 
 @njit(cache=True)
@@ -221,7 +224,7 @@ def _inside(px, py, pz, r, h, cx, cy, cz, hx, hy, hz, c, s):
 
 @njit(cache=True)
 def _moved(inside, stayed, held, within, moved, every, shifted, positions, radii, half_heights, centers,
-           half_extents, cos, sin, grid, mobile):
+           half_extents, cos, sin, grid, still, mobile):
     """One tick's occupancy in place: each trigger against the `moved` bodies (the others keep
     theirs), or, if it was `shifted`, against `every` body in play; then whether anything is
     inside it now (`stayed`). The changes, (trigger, body, entered) each, trigger by trigger and
@@ -229,19 +232,19 @@ def _moved(inside, stayed, held, within, moved, every, shifted, positions, radii
 
     `held` (per trigger) and `within` (per body) count the pairs inside, kept up to date here. A
     moved body is tested against the triggers it was inside, those `mobile` (moved with an arm's
-    tool) and those its cell of `grid` lists (VolumeTriggers._grid: the others, the triggers
-    too far to reach it, would find it outside as before): the result of testing every pair, at
-    a cost that grows with the bodies, not with bodies × triggers."""
+    tool) and those of `still` its cell of `grid` lists (VolumeTriggers._grid: the others are too
+    far to hold it); a shifted box against the bodies within its bounds: the result of testing
+    every pair, without testing every pair of a hall. The changes come sorted, which is the order
+    above because `moved` and `every` are ascending (bodies.py's rows, np.flatnonzero)."""
     n_bodies = inside.shape[1]
     keys = [np.int64(k) for k in range(0)]   # t·2N + n for an entry, t·2N + N + n for a leave
-    reach = (radii.max() if radii.shape[0] else 0.0) + BOUNDS_MARGIN
+    widest = reach(radii)
     for t in range(inside.shape[0]):
         if shifted[t]:   # the box's bounds first: a body beyond them is not inside (and was not, or is tested)
-            ex = abs(cos[t]) * half_extents[t, 0] + abs(sin[t]) * half_extents[t, 1] + reach
-            ey = abs(sin[t]) * half_extents[t, 0] + abs(cos[t]) * half_extents[t, 1] + reach
+            ex, ey = extents(cos[t], sin[t], half_extents[t, 0], half_extents[t, 1])
             for n in every:
-                if inside[t, n] or (abs(positions[n, 0] - centers[t, 0]) <= ex
-                                    and abs(positions[n, 1] - centers[t, 1]) <= ey):
+                if inside[t, n] or (abs(positions[n, 0] - centers[t, 0]) <= ex + widest
+                                    and abs(positions[n, 1] - centers[t, 1]) <= ey + widest):
                     _flip(keys, inside, held, within, t, n, positions, radii, half_heights, centers, half_extents,
                           cos, sin)
     held_now = np.flatnonzero(held)   # a body inside a trigger is inside one of these
@@ -253,9 +256,10 @@ def _moved(inside, stayed, held, within, moved, every, shifted, positions, radii
                           cos, sin)
         first, last = at_point(grid, positions[n, 0], positions[n, 1])
         for s in range(first, last):
-            if not inside[grid[s], n] and not shifted[grid[s]]:
-                _flip(keys, inside, held, within, grid[s], n, positions, radii, half_heights, centers,
-                      half_extents, cos, sin)
+            t = still[grid[s]]
+            if not inside[t, n] and not shifted[t]:
+                _flip(keys, inside, held, within, t, n, positions, radii, half_heights, centers, half_extents,
+                      cos, sin)
         for t in mobile:
             if not inside[t, n] and not shifted[t]:
                 _flip(keys, inside, held, within, t, n, positions, radii, half_heights, centers, half_extents,

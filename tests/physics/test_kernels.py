@@ -190,14 +190,21 @@ def test_a_ticks_occupancy_lists_who_entered_and_left_each_trigger(seed):
     every = np.arange(30, dtype=np.int64)
     inside, stayed = before.copy(), np.zeros(6, bool)
     held, within = before.sum(axis=1), before.sum(axis=0)
-    mobile = np.flatnonzero(shifted | (rng.random(6) < 0.2))   # moved once, or this tick
-    grid = G.still_grid(c, h, cos, sin, mobile, b["radii"].max() + G.BOUNDS_MARGIN)
+    triggers = G.VolumeTriggers()
+    for k in range(6):
+        triggers.add(c[k], h[k], math.atan2(sin[k], cos[k]))
+    triggers.boxes.cos[:], triggers.boxes.sin[:] = cos, sin
+    for k in np.flatnonzero(shifted | (rng.random(6) < 0.2)):   # moved once, or this tick
+        triggers.move(k, c[k])
+    grid, still, mobile = triggers._grid(b["radii"])
+    if rng.random() < 0.5:   # not every body in play; those that moved are
+        every = np.union1d(moved, rng.choice(30, 20, replace=False)).astype(np.int64)
     changes = G._moved(inside, stayed, held, within, moved, every, shifted, b["positions"], b["radii"],
-                       b["half_heights"], c, h, cos, sin, grid, mobile)
+                       b["half_heights"], c, h, cos, sin, grid, still, mobile)
     now = ref.inside(b["positions"], b["radii"], b["half_heights"], c, h, cos, sin)
     looked = np.zeros((6, 30), bool)
     looked[:, moved] = True
-    looked[shifted] = True
+    looked[np.ix_(shifted, every)] = True
     expected_inside = np.where(looked, now, before)
     assert (inside == expected_inside).all() and (stayed == expected_inside.any(axis=1)).all()
     assert (held == expected_inside.sum(axis=1)).all() and (within == expected_inside.sum(axis=0)).all()
