@@ -17,10 +17,3 @@ def write_scenario(tmp_path):
     return write
 
 
-
-def pytest_collection_modifyitems(config, items):
-    """The files that hold a slow test first, each whole and in its own order, then the rest as
-    collected: `make test`'s `--dist loadfile` hands whole files to its workers in this order, so
-    the long ones start at once and the short ones even out the end."""
-    slow = {item.path for item in items if item.get_closest_marker("slow")}
-    items.sort(key=lambda item: item.path not in slow)
