@@ -16,4 +16,3 @@ def write_scenario(tmp_path):
         return path
     return write
 
-
