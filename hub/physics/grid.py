@@ -56,14 +56,17 @@ def grid_of(boxes: np.ndarray) -> np.ndarray:
 @njit(cache=True)
 def in_cells(grid, x_lo, x_hi, y_lo, y_hi, found):
     """The boxes listed in the cells the rectangle [x_lo, x_hi] × [y_lo, y_hi] covers, each once (at
-    the first of its cells in the rectangle), into `found` in the boxes' order; returns how many."""
+    the first of its cells in the rectangle), into `found` in the boxes' order; returns how many
+    (none for a rectangle off the grid or not a number)."""
     x0, y0, nx, ny, m, cell = grid[0], grid[1], grid[2], grid[3], grid[4], grid[5] / 1e6
     if nx == 0:
         return 0
-    i_lo = max(0, int(math.floor(x_lo / cell)) - x0)
-    i_hi = min(nx - 1, int(math.floor(x_hi / cell)) - x0)
-    j_lo = max(0, int(math.floor(y_lo / cell)) - y0)
-    j_hi = min(ny - 1, int(math.floor(y_hi / cell)) - y0)
+    fx_lo, fx_hi = np.floor(x_lo / cell) - x0, np.floor(x_hi / cell) - x0   # floats: compared before made integers
+    fy_lo, fy_hi = np.floor(y_lo / cell) - y0, np.floor(y_hi / cell) - y0
+    if not (fx_hi >= 0.0 and fx_lo < nx and fy_hi >= 0.0 and fy_lo < ny):   # off the grid, or not a number
+        return 0
+    i_lo, i_hi = int(max(fx_lo, 0.0)), int(min(fx_hi, nx - 1.0))
+    j_lo, j_hi = int(max(fy_lo, 0.0)), int(min(fy_hi, ny - 1.0))
     ranges, starts = 6, 6 + 4 * m
     items = starts + nx * ny + 1
     count = 0
