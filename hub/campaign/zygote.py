@@ -9,9 +9,9 @@ still, in a session of its own, with the zygote's warm memory — that returns f
 this file's `__main__` and becomes `planthub test ARGS`, as `python -m hub` would, and ends as an
 interpreter ends — its threads joined, atexit's handlers run, its streams flushed, its exit status
 the same — except that it does not tear down the zygote's modules one by one (`_end`; a bottling
-plant's are many, and their teardown writes nothing of the case's). It dies with the zygote (Linux's parent-death signal),
-and the zygote with its worker: it reads requests on its stdin and exits at end of file, so a
-worker that dies takes its zygote, and so its cases, with it.
+plant's are many, and their teardown writes nothing of the case's). It dies with the zygote
+(Linux's parent-death signal), and the zygote with its worker: it reads requests on its stdin and
+exits at end of file, so a worker that dies takes its zygote, and so its cases, with it.
 
 Not multiprocessing's forkserver: its children first rerun the parent's main module (Dask's
 worker, a benchmark's script), it has no hook for the warm-up run, and they end by os._exit with

@@ -11,8 +11,9 @@ by side on a campaign's embedded Dask LocalCluster (hub/campaign/cluster.py, `Cl
 worker a core: each case is one process's work, so on two cores the others run beside the longest,
 the bottling plant's hour (alone on the 2-core machine: 18 min; the jam 5 min, the loop 2 min, the
 rest seconds; 25 min one after another). A case's wall time is measured beside the others', and
-a case's memory is held to its worker's share of the machine's (Dask's nanny: memory over workers). The paper's loop fails its hour today (a bottle falls over at ~715 s: cases.py, LOOP_*),
-so the run exits 1.
+a case's memory is held to its worker's share of the machine's (Dask's nanny: memory over
+workers). The paper's loop fails its hour today (a bottle falls over at ~715 s: cases.py,
+LOOP_*), so the run exits 1.
 """
 from __future__ import annotations
 
