@@ -116,7 +116,10 @@ def run(args) -> int:
             _log.error(f"planthub gateway {args.object!r}: {exc} (plc_ready is {where} of the {args.protocol} "
                        f"server at {endpoint}); the PLC sets it once it runs, then the gateway joins the plant")
             return 1
-        status = serve(gateway, args=args)
+        try:
+            status = serve(gateway, args=args)
+        finally:
+            image.release()   # a read the PLC has held for a next scan is answered now
         if image.refused:
             _log.warning(f"gateway {args.object!r}: {image.refused} writes refused (each logged above)")
         return status

@@ -149,6 +149,8 @@ class _TagAttribute(device.Attribute):
     def __getitem__(self, key):
         self.error = 0x00
         tag = self.tag
+        if tag.slot == "cycle":
+            self.image.hold()   # lockstep: held while the plant steps to its next scan (hub/gateway/image.py)
         value = self.image.read(tag.slot)
         if tag.type is SlotType.STRING:   # its UTF-8 bytes, as the ISO 8859-1 text cpppo encodes an SSTRING from
             value = value.encode()[:2 * tag.length].decode(errors="ignore").encode().decode("iso-8859-1")

@@ -4,7 +4,8 @@ lockstep handshake: the plant holds at a scan until the PLC writes the scan's nu
 The plant side (the participant, in the serve loop's thread) puts the PLC's inputs and takes its
 outputs; the protocol side (the server's event-loop thread) reads the inputs and writes the outputs.
 One lock guards both; a condition wakes the plant when the PLC writes a handshake tag (only those
-are waited on). Every wait has a limit.
+are waited on), and a PLC's read of `cycle` held between two scans (`hold`) when the next begins.
+Every wait has a limit.
 """
 from __future__ import annotations
 
@@ -17,10 +18,11 @@ from hub.core.slots import SlotType
 from hub.gateway.tags import INPUT, TagMap
 
 _log = logging.getLogger("planthub.gateway")
+HOLD = 0.1   # s at most that a PLC's read of `cycle` is held for the next scan
 
 
 class ProcessImage:
-    def __init__(self, tags: TagMap):
+    def __init__(self, tags: TagMap, hold: float = HOLD):
         self.tags = tags
         self.values = {t.slot: (0 if t.type is SlotType.VOID and t.direction == INPUT else
                                 False if t.type is SlotType.VOID else t.type.initial()) for t in tags.tags}
@@ -33,6 +35,10 @@ class ProcessImage:
         # at the GIL; the plant waits on handshake tags alone, so only they wake it.
         self._wakers = frozenset(t.slot for t in tags.tags if t.handshake)
         self._order = [t.slot for t in tags.tags if not t.handshake] + [t.slot for t in tags.tags if t.handshake]
+        self.holds = False   # lockstep: a read of `cycle` between two scans is held for the next
+        self.hold_limit = hold
+        self.scan = None     # the scan the plant is at or last was (None: none yet)
+        self.held = 0        # reads of `cycle` that waited for a scan
 
     # --- the protocol side
     def read(self, slot: str):
@@ -45,6 +51,27 @@ class ProcessImage:
             self.values[slot] = value
             if slot in self._wakers:
                 self._lock.notify_all()
+
+    def hold(self) -> None:
+        """A PLC's read of `cycle`, in lockstep: while the plant steps toward its next scan (it has none
+        yet, or the PLC answered the last), wait for that scan, at most `hold_limit` s. A PLC polling
+        `cycle` then learns of a scan as soon as the plant is at it, and its polls between two scans
+        cost the plant nothing. The read is answered either way: after the limit, with the scan it
+        answered last."""
+        deadline = time.monotonic() + self.hold_limit
+        with self._lock:
+            if self._between_scans():
+                self.held += 1
+            while self._between_scans():
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return
+                self._lock.wait(left)
+
+    def _between_scans(self) -> bool:
+        """Lockstep, and the plant steps toward its next scan: it has none yet, or the PLC answered the
+        last (the caller holds the lock)."""
+        return self.holds and (self.scan is None or self.values["cycle_done"] == self.scan)
 
     def refuse(self, where: str, why: str) -> None:
         with self._lock:
@@ -67,6 +94,18 @@ class ProcessImage:
                 if self.values[slot] != value:
                     self.values[slot] = value
                     self.changed.add(slot)
+
+    def begin_scan(self, cycle: int) -> None:
+        """The plant is at scan `cycle`, its values published: the reads held for it go on."""
+        with self._lock:
+            self.scan = cycle
+            self._lock.notify_all()
+
+    def release(self) -> None:
+        """The run is over: no read is held any more."""
+        with self._lock:
+            self.holds = False
+            self._lock.notify_all()
 
     def outputs(self) -> dict:
         """The PLC's outputs for this step; a command bit fires on its rising edge."""

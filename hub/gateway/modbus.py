@@ -37,6 +37,7 @@ class ModbusServer:
         host, _, port = endpoint.rpartition(":")
         self.address = (host or "127.0.0.1", int(port))
         self.by_table = {table: [t for t in image.tags.tags if t.table == table] for table in _TABLES}
+        self.cycle = image.tags.by_slot["cycle"]
         self.server = None
         self.task = None
 
@@ -75,6 +76,8 @@ class ModbusServer:
             tags = [t for t in self.by_table.get(table, ())
                     if t.address < address + len(values) and address < t.address + t.count]
             return self._write(table, address, values, tags)
+        if self.cycle.table == table and self.cycle.address < address + count and address < self.cycle.address + 1:
+            self.image.hold()   # lockstep: held while the plant steps to its next scan (hub/gateway/image.py)
         for tag in self.by_table.get(table, ()) if bits else self._overlapping(table, address, count):
             words = _encode(tag, self.image.read(tag.slot))   # fresh from the image
             if bits:

@@ -17,10 +17,12 @@ without a channel certificate is refused here too (BadUserAccessDenied).
 """
 from __future__ import annotations
 
+import asyncio
 import dataclasses
 import logging
 
 from asyncua import Server, ua
+from asyncua.common.callback import CallbackType
 from asyncua.crypto.permission_rules import User, UserRole
 from asyncua.crypto.validator import CertificateValidator, CertificateValidatorOptions
 from asyncua.server.address_space import AttributeService
@@ -44,6 +46,8 @@ class OpcUaServer:
         self.image, self.endpoint, self.user, self.certificates = image, endpoint, user, certificates
         self.server = None
         self.nodes = {}        # slot → NodeId
+        self.published = None  # the last `cycle` published (None: none yet)
+        self.held = []         # the futures of the reads of `cycle` held for the next scan
 
     async def start(self) -> None:
         users = _Users(self.user, secured=self.certificates is not None,
@@ -82,6 +86,7 @@ class OpcUaServer:
             self.nodes[tag.slot] = node.nodeid
         server.iserver.attribute_service = _CheckedWrites(server.iserver.aspace, self.image,
                                                           {self.nodes[t.slot]: t for t in self.image.tags.tags})
+        server.subscribe_server_callback(CallbackType.PreRead, self._hold)
         await server.start()
         self.server = server
 
@@ -101,6 +106,28 @@ class OpcUaServer:
         for slot, value in changed.items():
             tag = self.image.tags.by_slot[slot]
             await self.server.write_attribute_value(self.nodes[slot], ua.DataValue(ua.Variant(value, _VARIANT[tag.opcua_type])))
+        if "cycle" in changed:   # a scan begins: the reads held for it go on
+            self.published = changed["cycle"]
+            held, self.held = self.held, []
+            for future in held:
+                if not future.done():
+                    future.set_result(None)
+
+    async def _hold(self, event, _dispatcher) -> None:
+        """A Read of `cycle`'s value while the plant steps to its next scan waits for it (as
+        ProcessImage.hold does in the other protocols' threads, here in the server's event loop)."""
+        cycle = self.nodes["cycle"]
+        if not any(r.NodeId == cycle and r.AttributeId == ua.AttributeIds.Value for r in event.request_params.NodesToRead):
+            return
+        if not self.image.holds or self.published not in (None, self.image.read("cycle_done")):
+            return
+        future = asyncio.get_running_loop().create_future()
+        self.held.append(future)
+        self.image.held += 1   # (only this loop's thread counts them: one protocol to a gateway)
+        try:
+            await asyncio.wait_for(future, self.image.hold_limit)
+        except TimeoutError:
+            pass
 
     async def stop(self) -> None:
         if self.server is not None:

@@ -24,6 +24,7 @@ class Gateway(Participant):
                  plc_timeout: float = 0.5, ready_timeout: float = 30.0):
         self.tags, self.server, self.mode = tags, server, mode
         self.image = server.protocol.image
+        self.image.holds = mode == LOCKSTEP
         self.scan, self.plc_timeout, self.ready_timeout = scan, plc_timeout, ready_timeout
         plain = [t for t in tags.tags if not t.handshake]
         self.inputs = {t.slot: t.type.value for t in plain if t.direction == "input"}
@@ -57,6 +58,7 @@ class Gateway(Participant):
             self.server.publish(self.image.take_changed())
         if held:
             cycle = self.cycle
+            self.image.begin_scan(cycle)
             self.image.wait(lambda v: v["cycle_done"] == cycle, self.plc_timeout,
                             f"the PLC did not answer scan {cycle} (t = {t:.6g} s)")
         for slot, value in self.image.outputs().items():

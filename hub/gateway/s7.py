@@ -47,6 +47,7 @@ class S7Server:
         host, _, port = endpoint.rpartition(":")
         self.host, self.port = host or "127.0.0.1", int(port)
         self.tags = image.tags.tags
+        self.cycle = image.tags.by_slot["cycle"]
         self.server = None
         self.memory = {}       # S7Area, DB number → the area's bytes (the server's own bytearray)
         # area → the bytes between its tags that keep the numbers at even bytes: like the bits of no
@@ -148,6 +149,15 @@ class _Server(Server):
         if spec and spec["word_len"] == S7WordLen.BIT:
             spec["bit"] = int.from_bytes(addr_spec[9:12], "big") % 8
         return spec
+
+    def _handle_read_area(self, request, client_address):
+        if request["parameters"].get("item_count", 1) == 1:
+            at = self._parse_read_address(request)
+            cycle = self.gateway.cycle
+            if at and (at[0], at[1]) == _AREAS[S7_MARKERS][1:] and at[2] < cycle.s7_byte + cycle.s7_size \
+                    and cycle.s7_byte < at[2] + at[3]:
+                self.gateway.image.hold()   # lockstep: held while the plant steps to its next scan (hub/gateway/image.py)
+        return super()._handle_read_area(request, client_address)
 
     def _handle_write_area(self, request, client_address):
         items = request["parameters"].get("item_count", 1)

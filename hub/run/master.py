@@ -190,9 +190,10 @@ class Master:
             self.close("the run failed")
             raise
         self.stopped = stop
+        wall = time.perf_counter() - started   # the stepping: what the observers' closing takes is not in it
         if stop is not None or self.world.tick >= scenario_end:
             self.close(stop.reason if stop is not None else "the run reached its end")
-        return RunResult(self.world.tick - start_tick, self.world.rate, time.perf_counter() - started,
+        return RunResult(self.world.tick - start_tick, self.world.rate, wall,
                          stop.reason if stop is not None else "", stop is not None and stop.ended)
 
     def close(self, reason: str = "closed") -> None:
