@@ -41,7 +41,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--export-tia", type=Path, metavar="FILE.csv",
                         help="write the S7 tags (I, Q, M) as a TIA Portal PLC tag table and exit")
     parser.add_argument("--sync", choices=["lockstep", "live"], default="lockstep",
-                        help="lockstep: hold the plant at every scan until the PLC answers (deterministic); "
+                        help="lockstep: hold the plant at every scan until the PLC answers (deterministic), and "
+                             "a PLC's poll of cycle between two scans until the next begins; "
                              "live: never hold (run the plant with --realtime)")
     parser.add_argument("--scan", type=float, metavar="S",
                         help="lockstep: plant time between two scans, a whole number of communication steps "

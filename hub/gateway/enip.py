@@ -8,10 +8,12 @@ out of the tag's range, not finite or a string too long or not UTF-8 0x09 "inval
 value". cpppo itself refuses an unknown tag (0x05 "path destination unknown"), a value of a type
 that does not fit the tag, or more elements than the tag has (0xFF, extended status 0x2107 and
 0x2105); every refusal is logged, and nothing of it reaches the plant. An SSTRING's bytes are the
-string's UTF-8, both ways (cpppo itself takes them for ISO 8859-1 text).
+string's UTF-8, both ways (cpppo itself takes them for ISO 8859-1 text). In lockstep a read of `cycle`
+between two scans is held until the next begins (`image.py`), and the tags after it in the same
+request are read then.
 
 cpppo was chosen as the only maintained pure-Python EtherNet/IP *server* (pycomm3 and pylogix are
-clients); it keeps its tags in module globals, so one gateway per process (as `planthub gateway` is).
+clients); it keeps its tags in module globals, so one gateway at a time in a process (as `planthub gateway` is).
 Its answers take a few ms of CPU each (a Python parser per request): see make bench's gateway section (tests/README.md).
 """
 from __future__ import annotations
@@ -79,6 +81,9 @@ class EnipServer:
             pass
         TagAttribute.image = image
         TagAttribute.by_name = {t.name: t for t in image.tags.tags}
+        # cpppo keeps its tags in module globals, and for a tag it knows already keeps the old attribute
+        # (5.2.5's setup_tag): a second server in this process (tests) would answer from the first's image
+        device.lookup_reset()
         self.control = cpppo.apidict(timeout=1.0)
         self.control["control"] = cpppo.dotdict(done=False, disable=False)
         argv = ["--address", f"{self.host}:{self.port}", "--no-config",

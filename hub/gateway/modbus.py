@@ -7,7 +7,8 @@ a write is checked before it is taken, and refused with Modbus's own exception c
 tag holds ILLEGAL_ADDRESS (02), a part of a multi-register value alone, a value out of the tag's
 range, a scaled value beyond its raw range or a string that is not UTF-8 ILLEGAL_VALUE (03); each
 refusal is logged and nothing reaches the plant. Discrete inputs and input registers cannot be
-written at all (Modbus has no function for it: ILLEGAL_FUNCTION, 01, from pymodbus).
+written at all (Modbus has no function for it: ILLEGAL_FUNCTION, 01, from pymodbus). In lockstep a
+read of the input registers over `cycle` between two scans is held until the next begins (`image.py`).
 """
 from __future__ import annotations
 

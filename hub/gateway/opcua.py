@@ -7,7 +7,8 @@ from, its EngineeringUnits and EURange where the tag map gives them. Only the PL
 writable. A write is refused with the protocol's own status: an unknown node BadNodeIdUnknown, a
 PLC input BadUserAccessDenied (asyncua, for every user but an admin), a value of another type
 BadTypeMismatch, a value out of the tag's range or not finite BadOutOfRange; each refusal is logged
-and nothing reaches the plant. Clients subscribe with their own sampling interval.
+and nothing reaches the plant. Clients subscribe with their own sampling interval. In lockstep a
+Read of `cycle`'s value between two scans waits, in the server's event loop, until the next begins.
 
 Security: with `Certificates` the endpoint offers Basic256Sha256 Sign and SignAndEncrypt only, the
 server's application URI taken from its certificate; a client's certificate must be valid (its time
@@ -108,10 +109,13 @@ class OpcUaServer:
             await self.server.write_attribute_value(self.nodes[slot], ua.DataValue(ua.Variant(value, _VARIANT[tag.opcua_type])))
         if "cycle" in changed:   # a scan begins: the reads held for it go on
             self.published = changed["cycle"]
-            held, self.held = self.held, []
-            for future in held:
-                if not future.done():
-                    future.set_result(None)
+            self._go_on()
+
+    def _go_on(self) -> None:
+        held, self.held = self.held, []
+        for future in held:
+            if not future.done():
+                future.set_result(None)
 
     async def _hold(self, event, _dispatcher) -> None:
         """A Read of `cycle`'s value while the plant steps to its next scan waits for it (as
@@ -130,6 +134,7 @@ class OpcUaServer:
             pass
 
     async def stop(self) -> None:
+        self._go_on()   # a read held for a next scan is answered now
         if self.server is not None:
             await self.server.stop()
             self.server = None

@@ -12,6 +12,8 @@ refusal is logged and nothing reaches the plant; bits of a written byte that no 
 padding bytes that keep numbers at even bytes, are ignored (a write of nothing but them is refused).
 A write of several items in one request and a block download are refused whole, with the PDU error
 0x8104 "function not supported" (snap7 would apply the first item only, and a download unchecked).
+In lockstep a read of the markers over `cycle` (one item) between two scans is held until the next
+begins (`image.py`).
 
 python-snap7 3.3.0's server has no hook for writes (its `set_rw_area_callback` is a stub), so
 `_Server` overrides its write handler, and keeps the bit of a bit-sized write that it would drop.

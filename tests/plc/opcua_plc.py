@@ -39,7 +39,7 @@ async def main(args) -> int:
     node = lambda tag: client.get_node(ua.NodeId(tags[tag]["opcua_node"].split(";s=")[1], ns))
     lanes = args.lanes.split(",")
     pairs = range(1, len(lanes) + 1)
-    watched = ["cycle"] + [f"r{i}_read" for i in pairs] + [f"r{i}_destination" for i in pairs]
+    watched = ["cycle"] + [f"r{i}_read" for i in pairs]
     commands = [f"sw{i}_{kind}" for i in pairs for kind in ("work", "base")]
     written = dict.fromkeys(commands, False)   # what the gateway holds: every command starts off
     routing, last, scans = Routing(lanes), 0, 0
@@ -54,7 +54,9 @@ async def main(args) -> int:
                 continue
             cycle = values["cycle"]
             counts = [values[f"r{i}_read"] for i in pairs]
-            bits = routing.scan(counts, [values[f"r{i}_destination"] for i in pairs])
+            moved = [i for i in pairs if counts[i - 1] != routing.seen[i - 1]]   # a destination only when its reader saw a bottle
+            destinations = dict(zip(moved, await client.read_values([node(f"r{i}_destination") for i in moved]))) if moved else {}
+            bits = routing.scan(counts, [destinations.get(i, "") for i in pairs])
             changed = [c for c in commands if bits[c] != written[c]]
             await client.write_values([node(c) for c in changed] + [node("cycle_done")],
                                       [ua.Variant(bits[c], ua.VariantType.Boolean) for c in changed]
