@@ -1,7 +1,8 @@
 """A PLC's poll of `cycle` in lockstep, over each protocol: made while the plant steps toward its next
 scan (the PLC answered the last), it is held by the gateway and answered with the next scan's
-number as soon as that scan begins; in live mode it is answered at once. The hold has a limit and
-ends with the run. A real server in this process, a real client of the protocol in another."""
+number as soon as that scan begins, while the server goes on answering other clients; in live mode
+it is answered at once. The hold has a limit and ends with the run. A real server in this process,
+real clients of the protocol in other processes."""
 import subprocess
 import sys
 import textwrap
@@ -21,7 +22,7 @@ from .helpers import ROOT
 HOLD = 20.0   # s: longer than the test needs to see the read held and begin the scan
 LIMIT = 60.0  # s for anything the test waits on
 
-READ = {   # a client reading `cycle` once and printing it (the placeholders filled in below)
+READ = {   # a client reading a tag (`cycle`, unless told) once and printing it (the placeholders filled in below)
     "modbus": """
         from pymodbus.client import ModbusTcpClient
         c = ModbusTcpClient("127.0.0.1", port=PORT, timeout=60, retries=0)
@@ -32,19 +33,19 @@ READ = {   # a client reading `cycle` once and printing it (the placeholders fil
         from snap7.type import Area
         c = snap7.Client()
         c.connect("127.0.0.1", 0, 1, PORT)
-        print(struct.unpack(">H", c.read_area(Area.MK, 0, BYTE, 2))[0])""",
+        print(struct.unpack(">H", c.read_area(Area.AREA, 0, BYTE, 2))[0])""",
     "enip": """
         from pylogix import PLC
         with PLC("127.0.0.1") as c:
             c.Port, c.SocketTimeout = PORT, 60
-            print(c.Read("cycle").Value)""",
+            print(c.Read("TAG").Value)""",
     "opcua": """
         import asyncio
         from asyncua import Client, ua
         async def main():
             async with Client("ENDPOINT", timeout=60) as c:
                 ns = await c.get_namespace_index("NAMESPACE")
-                print(await c.get_node(ua.NodeId("gateway.cycle", ns)).read_value())
+                print(await c.get_node(ua.NodeId("NODE", ns)).read_value())
         asyncio.run(main())""",
 }
 
@@ -70,11 +71,12 @@ def scan(server, image: ProcessImage, cycle: int) -> None:
     image.begin_scan(cycle)
 
 
-def reader(protocol: str, tags, port: int) -> subprocess.Popen:
-    cycle = tags.by_slot["cycle"]
-    code = textwrap.dedent(READ[protocol]).replace("PORT", str(port)).replace("ADDRESS", str(cycle.address)) \
-        .replace("BYTE", str(cycle.s7_byte)).replace("ENDPOINT", f"opc.tcp://127.0.0.1:{port}/planthub") \
-        .replace("NAMESPACE", namespace(tags.run))
+def reader(protocol: str, tags, port: int, slot: str = "cycle") -> subprocess.Popen:
+    tag = tags.by_slot[slot]
+    code = textwrap.dedent(READ[protocol]).replace("PORT", str(port)).replace("ADDRESS", str(tag.address)) \
+        .replace("BYTE", str(tag.s7_byte)).replace("ENDPOINT", f"opc.tcp://127.0.0.1:{port}/planthub") \
+        .replace("NAMESPACE", namespace(tags.run)).replace("NODE", tag.node_id).replace("TAG", tag.name) \
+        .replace("AREA", {"I": "PE", "Q": "PA", "M": "MK"}.get(tag.s7_area, ""))
     return subprocess.Popen([sys.executable, "-c", code], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
 
@@ -107,6 +109,10 @@ def test_a_poll_between_two_scans_is_answered_with_the_next_scan_once_it_begins(
         while image.held == 0 and client.poll() is None and time.monotonic() < deadline:
             time.sleep(0.01)
         assert image.held == 1, f"the read of cycle was not held (the client ended with {client.poll()})"
+        image.put({"r1_read": 7})
+        server.publish(image.take_changed())
+        assert answer(reader(protocol, tags, port, "r1_read")) == 7   # another client, answered meanwhile
+        assert client.poll() is None and image.held == 1   # the first one still held
         scan(server, image, 2)
         assert answer(client) == 2   # asked before scan 2 began, answered with it
 
