@@ -19,8 +19,8 @@ from hub.scenario.checker import load_scenario
 from .gateway_support import BOTTLING, free_port
 from .helpers import ROOT
 
-HOLD = 20.0   # s: longer than the test needs to see the read held and begin the scan
 LIMIT = 60.0  # s for anything the test waits on
+HOLD = 2 * LIMIT   # s: a hold that is not ended by its scan outlasts every wait of the test
 
 READ = {   # a client reading a tag (`cycle`, unless told) once and printing it (the placeholders filled in below)
     "modbus": """
@@ -83,7 +83,7 @@ def reader(protocol: str, tags, port: int, slot: str = "cycle") -> subprocess.Po
 
 def answer(client: subprocess.Popen) -> int:
     try:
-        out, err = client.communicate(timeout=LIMIT)
+        out, err = client.communicate(timeout=LIMIT)   # less than HOLD: a read answered by its hold's end fails here
     finally:
         if client.poll() is None:
             client.kill()
@@ -131,12 +131,12 @@ def test_a_hold_ends_at_its_limit_and_at_the_end_of_the_run(tags):
     image.holds = True
     image.hold()   # no scan yet: held for its limit, then answered
     assert image.held == 1
-    image.hold_limit = LIMIT
+    image.hold_limit = HOLD
     waiting = threading.Thread(target=image.hold)
     waiting.start()
     deadline = time.monotonic() + LIMIT
     while image.held < 2 and time.monotonic() < deadline:
         time.sleep(0.01)
     image.release()   # the run ended
-    waiting.join(LIMIT)
+    waiting.join(LIMIT)   # less than HOLD: only release() ends it in time
     assert image.held == 2 and not waiting.is_alive()

@@ -10,7 +10,7 @@ that does not fit the tag, or more elements than the tag has (0xFF, extended sta
 0x2105); every refusal is logged, and nothing of it reaches the plant. An SSTRING's bytes are the
 string's UTF-8, both ways (cpppo itself takes them for ISO 8859-1 text). In lockstep a read of `cycle`
 between two scans is held until the next begins (`image.py`), and the tags after it in the same
-request are read then.
+request are read then (those before it, before the hold: a PLC names `cycle` first).
 
 cpppo was chosen as the only maintained pure-Python EtherNet/IP *server* (pycomm3 and pylogix are
 clients); it keeps its tags in module globals, so one gateway at a time in a process (as `planthub gateway` is).

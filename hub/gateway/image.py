@@ -60,17 +60,21 @@ class ProcessImage:
         answered last."""
         deadline = time.monotonic() + self.hold_limit
         with self._lock:
-            if self._between_scans():
+            if self._between():
                 self.held += 1
-            while self._between_scans():
+            while self._between():
                 left = deadline - time.monotonic()
                 if left <= 0:
                     return
                 self._lock.wait(left)
 
-    def _between_scans(self) -> bool:
-        """Lockstep, and the plant steps toward its next scan: it has none yet, or the PLC answered the
-        last (the caller holds the lock)."""
+    def between_scans(self) -> bool:
+        """Lockstep, and the plant steps toward its next scan: it has none yet, or the PLC answered
+        the last. A read of `cycle` now would be held."""
+        with self._lock:
+            return self._between()
+
+    def _between(self) -> bool:
         return self.holds and (self.scan is None or self.values["cycle_done"] == self.scan)
 
     def refuse(self, where: str, why: str) -> None:

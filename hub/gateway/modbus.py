@@ -77,7 +77,7 @@ class ModbusServer:
             tags = [t for t in self.by_table.get(table, ())
                     if t.address < address + len(values) and address < t.address + t.count]
             return self._write(table, address, values, tags)
-        if self.cycle.table == table and self.cycle.address < address + count and address < self.cycle.address + 1:
+        if self.cycle in self._overlapping(table, address, count) and self.image.between_scans():
             # lockstep: held while the plant steps to its next scan (hub/gateway/image.py), in a thread
             # of the loop's pool, so that the loop goes on serving other clients meanwhile
             await asyncio.get_running_loop().run_in_executor(None, self.image.hold)

@@ -131,7 +131,8 @@ class OpcUaServer:
         try:
             await asyncio.wait_for(future, self.image.hold_limit)
         except TimeoutError:
-            pass
+            if future in self.held:
+                self.held.remove(future)
 
     async def stop(self) -> None:
         self._go_on()   # a read held for a next scan is answered now
