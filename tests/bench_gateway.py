@@ -19,7 +19,7 @@ WAYS = [("routing participant over Zenoh (floor)", None, ()),
         ("Modbus TCP, lockstep, a scan every 0.1 s", "modbus", ("--scan", "0.1")),
         ("S7, lockstep, a scan every step", "s7", ()),
         ("S7, lockstep, a scan every 0.1 s", "s7", ("--scan", "0.1")),
-        # (cpppo parses each request in Python: a scan every step would take minutes)
+        ("EtherNet/IP, lockstep, a scan every step", "enip", ()),
         ("EtherNet/IP, lockstep, a scan every 0.1 s", "enip", ("--scan", "0.1"))]
 
 

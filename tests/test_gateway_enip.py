@@ -1,7 +1,8 @@
 """planthub gateway enip: the tags as Logix controller tags read and written by name by pylogix in
-another process (a real cpppo server), every kind of bad write refused with CIP's own status and
-logged, nothing of it reaching the plant, strings in UTF-8 both ways; a taken port refused naming it; and the bottling plant routed by a Logix PLC client scanning
-every 0.1 s (cpppo answers in ms of CPU per request: a scan at every step is what it cannot keep up with)."""
+another process (a real server), every kind of bad request refused with CIP's own status and
+logged, nothing of it reaching the plant, strings in UTF-8 both ways; a taken port refused naming
+it; and the bottling plant routed by a Logix PLC client scanning every 0.1 s (at every step:
+tests/test_gateway_plant.py)."""
 import logging
 import socket
 import subprocess
@@ -30,13 +31,34 @@ with PLC("127.0.0.1") as c:
     c.Port = PORT
     read = [(r.TagName, r.Value, r.Status) for r in c.Read(["occupied", "seen", "velocity", "cycle"])]
     who = c.Read("who").Value
+    odd = {"in capitals": (lambda r: (r.Value, r.Status))(c.Read("CYCLE")),
+           "two elements": c.Read("seen", count=2).Status, "an element": c.Read("seen[1]").Status}
     statuses = {what: c.Write(name, value).Status for what, name, value in [
         ("an input", "occupied", False), ("out of range", "speed", 9.0), ("not finite", "speed", float("nan")),
         ("unknown", "sped", 1.0), ("the scan number", "cycle", 3), ("a good speed", "speed", 1.5),
         ("a good bit", "run", True), ("a string too long", "label", "x" * 17),
         ("a string not UTF-8", "label", "\\xff\\xfe"),   # pylogix sends an SSTRING's characters as bytes
         ("a good string", "label", "B\\u00e9".encode().decode("latin-1"))]}   # "Bé" in UTF-8
-    print(repr((read, who, statuses)))
+    print(repr((read, who, odd, statuses)))
+"""
+RAW = """
+import asyncio, struct
+from ethernetip.logix.tag_client import TagClient
+
+async def main():   # unconnected requests of the wrong shape, which pylogix does not send
+    async with TagClient("127.0.0.1", PORT) as c:
+        said = {}
+        for what, data in [("a DINT to a REAL", (0xC4, 1, struct.pack("<i", 1))),
+                           ("too few bytes", (0xCA, 1, b"\\x00\\x00")),
+                           ("two elements", (0xCA, 2, struct.pack("<ff", 1, 1)))]:
+            try:
+                await c.write_raw("speed", *data)
+                said[what] = "taken"
+            except RuntimeError as exc:
+                said[what] = str(exc)
+        print(repr(said))
+
+asyncio.run(main())
 """
 
 
@@ -50,10 +72,14 @@ def test_bad_logix_writes_get_their_cip_status_and_nothing_reaches_the_plant(tmp
     image, port = ProcessImage(tags), free_port()
     with ServerThread(EnipServer(image, f"127.0.0.1:{port}"), "enip"):
         image.put({"who": "B\u00e91", "occupied": True, "seen": 3})
-        proc = subprocess.run([sys.executable, "-c", textwrap.dedent(CLIENT).replace("PORT", str(port))],
-                              capture_output=True, text=True, cwd=ROOT, timeout=60)
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    read, who, statuses = eval(proc.stdout)
+        proc, raw = (subprocess.run([sys.executable, "-c", textwrap.dedent(code).replace("PORT", str(port))],
+                                    capture_output=True, text=True, cwd=ROOT, timeout=60) for code in (CLIENT, RAW))
+    assert proc.returncode == 0 and raw.returncode == 0, proc.stderr[-2000:] + raw.stderr[-2000:]
+    read, who, odd, statuses = eval(proc.stdout)
+    assert odd == {"in capitals": (0, "Success"),   # Logix names are not case-sensitive
+                   "two elements": "Unknown error 255", "an element": "Unknown error 255"}   # pylogix has no name for 0xFF
+    assert eval(raw.stdout) == {what: f"CIP error: service=0x4D, status=0x{status:02X}" for what, status in
+                                [("a DINT to a REAL", 0xFF), ("too few bytes", 0x13), ("two elements", 0xFF)]}
     assert read == [("occupied", True, "Success"), ("seen", 3, "Success"), ("velocity", 0.0, "Success"),
                     ("cycle", 0, "Success")] and who == "B\u00e91"   # in UTF-8, as pylogix reads it
     assert statuses == {"an input": "Privilege violation", "out of range": "Invalid Attribute",
@@ -61,11 +87,17 @@ def test_bad_logix_writes_get_their_cip_status_and_nothing_reaches_the_plant(tmp
                         "the scan number": "Privilege violation", "a good speed": "Success", "a good bit": "Success",
                         "a string too long": "Invalid Attribute", "a string not UTF-8": "Invalid Attribute",
                         "a good string": "Success"}
-    assert image.outputs() == {"speed": 1.5, "run": True, "label": "B\u00e9"} and image.refused == 7
+    assert image.outputs() == {"speed": 1.5, "run": True, "label": "B\u00e9"} and image.refused == 12
     logged = caplog.text
     assert "refused a write to speed (EtherNet/IP): 0x09 invalid attribute value: 9.0 is outside 0..2" in logged
     assert "refused a write to occupied (EtherNet/IP): 0x0F privilege violation: a PLC input is read-only" in logged
-    assert "refused a write to sped (EtherNet/IP): 0x05 path destination unknown: no such tag" in logged
+    # pylogix reads a tag to learn its type before writing it: a tag no one has is refused at that read
+    assert "refused a read of sped (EtherNet/IP): 0x05 path destination unknown: no such tag" in logged
+    assert "refused a read of seen (EtherNet/IP): 0xFF general error, extended status 0x2105: element 1 of a tag of one" in logged
+    assert "refused a read of seen (EtherNet/IP): 0xFF general error, extended status 0x2105: 2 elements from byte 0" in logged
+    assert "refused a write to speed (EtherNet/IP): 0xFF general error, extended status 0x2107: a DINT written to a REAL" in logged
+    assert "refused a write to speed (EtherNet/IP): 0x13 not enough data: too few bytes for a REAL" in logged
+    assert "refused a write to speed (EtherNet/IP): 0xFF general error, extended status 0x2105: 2 elements written to a tag of one" in logged
     assert "refused a write to label (EtherNet/IP): 0x09 invalid attribute value: 17 bytes is longer than 16" in logged
     assert "refused a write to label (EtherNet/IP): 0x09 invalid attribute value: 'utf-8' codec can't decode" in logged
     assert logging.getLogger("enip.lgx").propagate   # as it was before the server: restored by its stop

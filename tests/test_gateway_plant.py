@@ -1,5 +1,5 @@
 """The bottling plant routed by an external PLC client process through `planthub gateway`, over OPC
-UA and over Modbus TCP, in lockstep: every bottle reaches its lane, and scanning at every step the
+UA, Modbus TCP and EtherNet/IP, in lockstep: every bottle reaches its lane, and scanning at every step the
 run is bit for bit the run of the routing participant it stands in for (modules/plant_control.py,
 in the hub's process); scanning every 0.1 s (a PLC's usual scan) it still routes every bottle right."""
 import pytest
@@ -33,7 +33,7 @@ def every_bottle_in_its_lane(out):
     return taken
 
 
-@pytest.mark.parametrize("protocol", ["opcua", "modbus"])
+@pytest.mark.parametrize("protocol", ["opcua", "modbus", "enip"])
 def test_a_plc_over_the_gateway_routes_every_bottle_as_the_participant_does_bit_for_bit(tmp_path, protocol, reference):
     out, plc_out = gateway_run(tmp_path, protocol)
     every_bottle_in_its_lane(out)

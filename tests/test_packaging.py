@@ -83,9 +83,8 @@ def _once(name: str, make) -> Path:
 
 
 def wheelhouse() -> Path:
-    """Every pinned wheel the install needs, runtime and build; a pin published only as source
-    (greenery, which cpppo needs) built into a wheel there, since the install takes nothing from
-    the index to build it."""
+    """Every pinned wheel the install needs, runtime and build; a pin published only as source is
+    built into a wheel there, since the install takes nothing from the index to build it."""
     build, _ = _pins()
     return _once("wheelhouse", lambda folder: _run(
         [sys.executable, "-m", "pip", "wheel", "--quiet", "--wheel-dir", folder, "-r", ROOT / "requirements.txt",

@@ -1,51 +1,53 @@
-"""The EtherNet/IP side of a gateway (cpppo's Logix simulator): every cpppo call planthub makes is in this file.
+"""The EtherNet/IP side of a gateway (cm-ethernetip's CIP stack): every cm-ethernetip call planthub makes is in this file.
 
 Each tag is a controller-scoped Logix tag of its name and type (BOOL, DINT, REAL, SSTRING; the tag
-map decides them), read and written by name with the Read/Write Tag services, as a ControlLogix
-answers pylogix or pycomm3. Reads are answered from the process image. A write is checked before it
-is taken, and refused with CIP's own general status: a PLC input 0x0F "privilege violation"; a value
-out of the tag's range, not finite or a string too long or not UTF-8 0x09 "invalid attribute
-value". cpppo itself refuses an unknown tag (0x05 "path destination unknown"), a value of a type
-that does not fit the tag, or more elements than the tag has (0xFF, extended status 0x2107 and
-0x2105); every refusal is logged, and nothing of it reaches the plant. An SSTRING's bytes are the
-string's UTF-8, both ways (cpppo itself takes them for ISO 8859-1 text). In lockstep a read of `cycle`
-between two scans is held until the next begins (`image.py`), and the tags after it in the same
-request are read then (those before it, before the hold: a PLC names `cycle` first).
+map decides them), read and written by name with the Read/Write Tag services (and their fragmented
+forms), alone or in a Multiple Service Packet, unconnected or over a Forward Open connection, as a
+ControlLogix answers pylogix. Names are not case-sensitive, as in Logix. Reads are answered from the
+process image. A write is checked before it is taken, and refused with CIP's own general status: a
+PLC input 0x0F "privilege violation"; a value out of the tag's range, not finite, or a string too
+long or not UTF-8 0x09 "invalid attribute value"; a value of another type 0xFF with extended status
+0x2107, more than one element 0xFF 0x2105, too few bytes 0x13 "not enough data". A tag no one has
+is 0x05 "path destination unknown" for a read as for a write. Every refusal is logged, and nothing of
+it reaches the plant. An SSTRING's bytes are the string's UTF-8, both ways.
 
-cpppo was chosen as the only maintained pure-Python EtherNet/IP *server* (pycomm3 and pylogix are
-clients); it keeps its tags in module globals, so one gateway at a time in a process (as `planthub gateway` is).
-Its answers take a few ms of CPU each (a Python parser per request): see make bench's gateway section (tests/README.md).
+In lockstep a request naming `cycle` between two scans is held until the next begins (`image.py`), in
+a thread of the loop's pool while the loop answers other clients: every tag of it is then read from
+that scan.
+
+cm-ethernetip (pure Python, asyncio, `struct` framing) answers a request in ~0.1 ms of CPU where
+cpppo, the other pure-Python EtherNet/IP server, took 3-15 ms (its parser reads byte by byte); pycomm3
+and pylogix are clients only. Its Connection Manager, Message Router and encapsulation are used as
+they are; the Logix tags are this file's (`_Tags`).
 """
 from __future__ import annotations
 
-import logging
-import socket
-import sys
-import threading
-import time
+import asyncio
+import math
+import struct
 
-import cpppo
-from cpppo.server.enip import device
-from cpppo.server.enip.main import main as enip_main
+from ethernetip.cip.identity_info import IdentityInfo
+from ethernetip.cip.path import CipPath
+from ethernetip.cip.service import CipServiceResponse
+from ethernetip.cip.status import CipStatus
+from ethernetip.connections.connection_manager import ConnectionManagerObject
+from ethernetip.logix.logix_dispatcher import LogixDispatcher
+from ethernetip.protocol.eip_adapter import EipAdapter
 
-from hub.core.errors import PlanthubError
 from hub.core.slots import SlotType
 from hub.gateway.image import ProcessImage
 from hub.gateway.server_thread import refuse_taken
 from hub.gateway.tags import OUTPUT, Tag
 
-PRIVILEGE_VIOLATION, INVALID_VALUE = 0x0F, 0x09
-STOP_LIMIT = 3.0   # s for cpppo's thread to end: less than the ServerThread's limit on the stop call
-_log = logging.getLogger(__name__)
-_CPPPO_LOGS = ("enip.srv", "enip.ucmm", "network", "cpppo")
-_REFUSING = ("enip.dev", "enip.lgx")
+READ, WRITE, READ_FRAGMENTED, WRITE_FRAGMENTED = 0x4C, 0x4D, 0x52, 0x53
+PATH_UNKNOWN, NOT_SUPPORTED, INVALID_VALUE, PRIVILEGE_VIOLATION, NOT_ENOUGH_DATA, GENERAL = \
+    0x05, 0x08, 0x09, 0x0F, 0x13, 0xFF
+WRONG_TYPE, WRONG_SIZE = 0x2107, 0x2105   # extended status of GENERAL, as a ControlLogix answers
+TYPES = {"BOOL": 0xC1, "DINT": 0xC4, "REAL": 0xCA, "SSTRING": 0xDA}
+NAMES = {code: name for name, code in TYPES.items()}
 DINT = 2 ** 31
-# cpppo parses each request in Python for 1.5-2 ms of CPU a tag, holding the GIL, while the plant's
-# step (Zenoh's callback threads, the participant's thread) waits to get it back: with Python's 5 ms
-# switch interval a step waited up to 5 ms per hand-over. 0.5 ms: the bottling plant's first 20 s with a
-# scan every 0.1 s took 9.95 s instead of 10.9 (medians of 3, side by side; the routing participant 1.14 s).
-# What is left is cpppo's parse itself: ~2 ms of CPU a tag read or written (tests/bench_gateway).
-SWITCH_INTERVAL = 0.0005
+FLOAT32 = struct.unpack("<f", b"\xff\xff\x7f\x7f")[0]   # REAL's largest finite value
+IDENTITY = IdentityInfo(device_type=0x0E, product_name="planthub gateway")   # 0x0E: a programmable logic controller
 
 
 class EnipServer:
@@ -55,156 +57,159 @@ class EnipServer:
         self.image = image
         host, _, port = endpoint.rpartition(":")
         self.host, self.port = host or "127.0.0.1", int(port)
-        self.control = None
-        self.thread = None
-        self.refusals = _Refusals(image)
-        self.loggers = {}   # cpppo's loggers as they were before start: (level, propagate), restored by stop
-        self.switch_interval = None   # the process's, before start: restored by stop
+        self.adapter = None
 
     async def start(self) -> None:
         refuse_taken(self.host, self.port, f"EtherNet/IP server at {self.host}:{self.port} did not start")
-        for name in (*_CPPPO_LOGS, *_REFUSING):
-            logger = logging.getLogger(name)
-            self.loggers[name] = logger.level, logger.propagate
-        for name in _CPPPO_LOGS:
-            logging.getLogger(name).setLevel(logging.ERROR)   # it logs every connection at WARNING
-        for name in _REFUSING:   # what they say of refused requests goes to the gateway's log, as a refusal
-            logger = logging.getLogger(name)
-            logger.setLevel(logging.INFO + 5)   # cpppo's NORMAL, at which it tells why a request failed
-            logger.propagate = False
-            logger.addHandler(self.refusals)
-        self.switch_interval = sys.getswitchinterval()
-        sys.setswitchinterval(min(SWITCH_INTERVAL, self.switch_interval))
-        image = self.image
-
-        class TagAttribute(_TagAttribute):
-            pass
-        TagAttribute.image = image
-        TagAttribute.by_name = {t.name: t for t in image.tags.tags}
-        # cpppo keeps its tags in module globals, and for a tag it knows already keeps the old attribute
-        # (5.2.5's setup_tag): a second server in this process (tests) would answer from the first's image
-        device.lookup_reset()
-        self.control = cpppo.apidict(timeout=1.0)
-        self.control["control"] = cpppo.dotdict(done=False, disable=False)
-        argv = ["--address", f"{self.host}:{self.port}", "--no-config",
-                *(f"{t.name}={t.logix_type}" for t in image.tags.tags)]
-        self.thread = threading.Thread(target=enip_main, name="enip server", daemon=True,
-                                       kwargs=dict(argv=argv, attribute_class=TagAttribute,
-                                                   server=dict(control=self.control["control"])))
-        self.thread.start()
-        deadline = time.monotonic() + 10.0
-        while True:   # until it listens (cpppo binds in its own thread)
-            try:
-                socket.create_connection((self.host, self.port), timeout=1.0).close()
-                return
-            except OSError as exc:
-                if not self.thread.is_alive() or time.monotonic() > deadline:
-                    raise PlanthubError(f"EtherNet/IP server at {self.host}:{self.port} did not start: {exc}") from None
-                time.sleep(0.05)
+        tags = _Tags(self.image)
+        self.adapter = _Adapter(tags, self.image)
+        await self.adapter.listen(self.host, self.port)
 
     def publish(self, changed: dict) -> None:
         """Nothing to do: every read is answered from the image."""
 
     async def stop(self) -> None:
-        if self.thread is not None:
-            self.control["control"]["done"] = True
-            self.thread.join(STOP_LIMIT)
-            if self.thread.is_alive():   # a daemon thread: it ends with the gateway's process
-                _log.warning("gateway: the EtherNet/IP server at %s:%s did not stop within %g s",
-                             self.host, self.port, STOP_LIMIT)
-            self.thread = None
-        for name in _REFUSING:
-            logging.getLogger(name).removeHandler(self.refusals)
-        for name, (level, propagate) in self.loggers.items():
-            logger = logging.getLogger(name)
-            logger.setLevel(level)
-            logger.propagate = propagate
-        self.loggers = {}
-        if self.switch_interval is not None:
-            sys.setswitchinterval(self.switch_interval)
-            self.switch_interval = None
+        if self.adapter is not None:
+            await self.adapter.close()
+            self.adapter = None
 
 
-class _TagAttribute(device.Attribute):
-    """A Logix tag whose value is the process image's; cpppo checks a write's type and size first,
-    then this checks its direction and value. A refusal is answered through cpppo's `error` (its
-    status for the request), cleared at the tag's next access. cpppo serves each connection in a
-    thread of its own and reads `error` in that thread right after the access: so `error` is the
-    thread's own, and another PLC's access to the same tag cannot clear a refusal before it is answered."""
+class _Adapter(EipAdapter):
+    """cm-ethernetip's TCP server, which closes its clients' connections when it stops (asyncio's
+    server only stops listening) and holds a poll of `cycle` between two scans."""
 
-    image: ProcessImage = None
-    by_name: dict = {}
+    def __init__(self, tags: _Tags, image: ProcessImage):
+        super().__init__(tags, IDENTITY)
+        self.image = image
+        cycle = image.tags.by_slot["cycle"].name.lower().encode()
+        self.poll = bytes([0x91, len(cycle)]) + cycle   # `cycle`'s ANSI symbolic segment in a request
+        self.writers = set()
+        # A connected reply carries the connection id the client chose for it (a Logix MSG instruction
+        # ignores any other): the Connection Manager's record of the Forward Open has it
+        self.connection_id_lookup = lambda ot: getattr(tags.connections.find_by_ot_id(ot), "to_connection_id", 0)
 
-    def __init__(self, *args, **kwargs):
-        self._errors = threading.local()
-        super().__init__(*args, **kwargs)
-
-    @property
-    def error(self) -> int:
-        return getattr(self._errors, "code", 0x00)
-
-    @error.setter
-    def error(self, code: int) -> None:
-        self._errors.code = code
-
-    @property
-    def tag(self) -> Tag:
-        return self.by_name[self.name]
-
-    def __getitem__(self, key):
-        self.error = 0x00
-        tag = self.tag
-        if tag.slot == "cycle":
-            self.image.hold()   # lockstep: held while the plant steps to its next scan (hub/gateway/image.py)
-        value = self.image.read(tag.slot)
-        if tag.type is SlotType.STRING:   # its UTF-8 bytes, as the ISO 8859-1 text cpppo encodes an SSTRING from
-            value = value.encode()[:2 * tag.length].decode(errors="ignore").encode().decode("iso-8859-1")
-        elif tag.logix_type == "DINT":
-            value = (int(value) + DINT) % (2 * DINT) - DINT if tag.type is SlotType.VOID else \
-                max(min(int(value), DINT - 1), -DINT)
-        self.default = value
-        return super().__getitem__(key)
-
-    def __setitem__(self, key, value):
-        self.error = 0x00
-        tag = self.tag
-        value = list(value)[0] if isinstance(key, slice) else value
-        where = f"{tag.name} (EtherNet/IP)"
-        if tag.direction != OUTPUT:
-            self.image.refuse(where, "0x0F privilege violation: a PLC input is read-only")
-            self.error = PRIVILEGE_VIOLATION
-            return
+    async def _handle_client(self, reader, writer) -> None:
+        self.writers.add(writer)
         try:
-            if tag.type is SlotType.STRING:   # cpppo decodes an SSTRING's bytes as ISO 8859-1: the PLC's bytes again
-                raw = value.encode("iso-8859-1") if isinstance(value, str) else bytes(value)
-                if len(raw) > 2 * tag.length:
-                    raise ValueError(f"{len(raw)} bytes is longer than {2 * tag.length}")
-                value = raw.decode()
-            else:
-                value = {"BOOL": bool, "REAL": float, "DINT": int}[tag.logix_type](value)
-            value = tag.check_written(value)
-        except (ValueError, UnicodeDecodeError) as exc:
-            self.image.refuse(where, f"0x09 invalid attribute value: {exc}")
-            self.error = INVALID_VALUE
-            return
-        self.image.write(tag.slot, value)
-        super().__setitem__(key, [value] if isinstance(key, slice) else value)
+            await super()._handle_client(_Polls(reader, self.image, self.poll), writer)
+        finally:
+            self.writers.discard(writer)
+
+    async def close(self) -> None:
+        for writer in list(self.writers):
+            writer.close()
+        await super().close()
 
 
-class _Refusals(logging.Handler):
-    """The requests cpppo refuses itself (an unknown tag, a type or a size that does not fit), logged as
-    the gateway's refusals: cpppo says so only in its own log."""
+class _Polls:
+    """A connection's reader that holds a request naming `cycle` between two scans until the next begins
+    (at most the image's hold limit), in a thread of the loop's pool. A request split across two reads
+    at that segment is answered at once: loopback and a PLC's small requests come whole."""
+
+    def __init__(self, reader: asyncio.StreamReader, image: ProcessImage, poll: bytes):
+        self.reader, self.image, self.poll = reader, image, poll
+
+    async def read(self, n: int) -> bytes:
+        chunk = await self.reader.read(n)
+        if self.poll in chunk.lower() and self.image.between_scans():
+            await asyncio.get_running_loop().run_in_executor(None, self.image.hold)
+        return chunk
+
+
+class _Tags(LogixDispatcher):
+    """The Logix tags of the process image, behind cm-ethernetip's Message Router and Connection Manager."""
 
     def __init__(self, image: ProcessImage):
-        super().__init__(logging.INFO + 5)
+        super().__init__(identity=IDENTITY)
         self.image = image
+        self.by_name = {t.name.lower(): t for t in image.tags.tags}
+        self.connections = ConnectionManagerObject()   # one this gateway keeps, for the connected replies' ids
+        self.connections.dispatch_request = self.dispatch
+        self.register_class(self.connections.cip_class)
 
-    def emit(self, record: logging.LogRecord) -> None:
-        text = record.getMessage()
-        if "Failed attempting to resolve path" in text:
-            symbol = text.split("'symbolic': '", 1)[-1].split("'", 1)[0]
-            self.image.refuse(f"{symbol} (EtherNet/IP)", "0x05 path destination unknown: no such tag")
-        elif "failed with Exception" in text and "Write Tag" in text:
-            why = text.split("failed with Exception: ", 1)[-1].splitlines()[0]
-            if "Forced failure" not in why:   # (that is this gateway's own refusal, logged already)
-                self.image.refuse("a tag (EtherNet/IP)", f"0xFF general error: {why}")
+    def on_unhandled(self, service: int, path: CipPath, data: bytes, default_status: int = PATH_UNKNOWN):
+        if path.symbolic_name is None:
+            return super().on_unhandled(service, path, data, default_status)
+        tag = self.by_name.get(path.symbolic_name.lower())
+        writing = service in (WRITE, WRITE_FRAGMENTED)
+        if tag is None:
+            return self._refuse(service, f"{path.symbolic_name} (EtherNet/IP)", "no such tag", PATH_UNKNOWN,
+                                access="a write to" if writing else "a read of")
+        where = f"{tag.name} (EtherNet/IP)"
+        if path.element_id:
+            return self._refuse(service, where, f"element {path.element_id} of a tag of one", GENERAL, WRONG_SIZE,
+                                access="a write to" if writing else "a read of")
+        if service in (READ, READ_FRAGMENTED):
+            return self._read(service, tag, data)
+        if writing:
+            return self._write(service, tag, where, data)
+        return CipServiceResponse.error(service, CipStatus.error(NOT_SUPPORTED))
+
+    def _read(self, service: int, tag: Tag, data: bytes) -> CipServiceResponse:
+        fragmented = service == READ_FRAGMENTED
+        where = f"{tag.name} (EtherNet/IP)"
+        if len(data) < (6 if fragmented else 2):
+            return self._refuse(service, where, "no element count", NOT_ENOUGH_DATA, access="a read of")
+        count, offset = struct.unpack_from("<HI", data) if fragmented else (struct.unpack_from("<H", data)[0], 0)
+        if count != 1 or offset:
+            return self._refuse(service, where, f"{count} elements from byte {offset} of a tag of one", GENERAL,
+                                WRONG_SIZE, access="a read of")
+        return CipServiceResponse.success(service, struct.pack("<H", TYPES[tag.logix_type]) +
+                                          _encode(tag, self.image.read(tag.slot)))
+
+    def _write(self, service: int, tag: Tag, where: str, data: bytes) -> CipServiceResponse:
+        head = 8 if service == WRITE_FRAGMENTED else 4
+        if len(data) < head:
+            return self._refuse(service, where, "no type and count", NOT_ENOUGH_DATA)
+        kind, count = struct.unpack_from("<HH", data)
+        if kind != TYPES[tag.logix_type]:
+            got = NAMES.get(kind, f"type 0x{kind:04X}")
+            return self._refuse(service, where, f"a {got} written to a {tag.logix_type}", GENERAL, WRONG_TYPE)
+        if count != 1 or (head == 8 and struct.unpack_from("<I", data, 4)[0]):
+            return self._refuse(service, where, f"{count} elements written to a tag of one", GENERAL, WRONG_SIZE)
+        if tag.direction != OUTPUT:
+            return self._refuse(service, where, "a PLC input is read-only", PRIVILEGE_VIOLATION)
+        try:
+            value = tag.check_written(_decode(tag, data[head:]))
+        except struct.error:
+            return self._refuse(service, where, f"too few bytes for a {tag.logix_type}", NOT_ENOUGH_DATA)
+        except (ValueError, UnicodeDecodeError) as exc:
+            return self._refuse(service, where, str(exc), INVALID_VALUE)
+        self.image.write(tag.slot, value)
+        return CipServiceResponse.success(service)
+
+    def _refuse(self, service: int, where: str, why: str, status: int, extended: int | None = None,
+                access: str = "a write to") -> CipServiceResponse:
+        meaning = {PATH_UNKNOWN: "path destination unknown", INVALID_VALUE: "invalid attribute value",
+                   PRIVILEGE_VIOLATION: "privilege violation", NOT_ENOUGH_DATA: "not enough data",
+                   GENERAL: f"general error, extended status 0x{extended or 0:04X}"}[status]
+        self.image.refuse(where, f"0x{status:02X} {meaning}: {why}", access=access)
+        codes = (status,) if extended is None else (status, extended)
+        return CipServiceResponse.error(service, CipStatus.error(*codes))
+
+
+def _encode(tag: Tag, value) -> bytes:
+    if tag.logix_type == "BOOL":
+        return b"\x01" if value else b"\x00"
+    if tag.logix_type == "DINT":   # an event counter wraps, a number saturates
+        return struct.pack("<i", (int(value) + DINT) % (2 * DINT) - DINT if tag.type is SlotType.VOID else
+                           max(min(int(value), DINT - 1), -DINT))
+    if tag.logix_type == "REAL":   # a value beyond REAL's range is its infinity, as a float32 cast gives
+        return struct.pack("<f", value if abs(value) <= FLOAT32 or math.isnan(value) else math.copysign(math.inf, value))
+    raw = value.encode()[:2 * tag.length].decode(errors="ignore").encode()   # whole characters only
+    return bytes([len(raw)]) + raw
+
+
+def _decode(tag: Tag, data: bytes):
+    if tag.logix_type == "BOOL":
+        return struct.unpack_from("<B", data)[0] != 0
+    if tag.logix_type == "DINT":
+        return struct.unpack_from("<i", data)[0]
+    if tag.logix_type == "REAL":
+        return float(struct.unpack_from("<f", data)[0])
+    (size,) = struct.unpack_from("<B", data)
+    if len(data) < 1 + size:
+        raise struct.error("short")
+    if size > 2 * tag.length:
+        raise ValueError(f"{size} bytes is longer than {2 * tag.length}")
+    return data[1:1 + size].decode()

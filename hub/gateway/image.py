@@ -27,7 +27,7 @@ class ProcessImage:
         self.values = {t.slot: (0 if t.type is SlotType.VOID and t.direction == INPUT else
                                 False if t.type is SlotType.VOID else t.type.initial()) for t in tags.tags}
         self.changed = set(self.values)        # inputs not yet handed to the server
-        self.refused = 0                       # writes the server refused (each logged)
+        self.refused = 0                       # requests the server refused (each logged)
         self._lock = threading.Condition()
         self._edges = {t.slot: False for t in tags.outputs if t.type is SlotType.VOID}
         # A PLC writes a scan's commands one tag after another (11 for the bottling plant): waking the
@@ -77,10 +77,11 @@ class ProcessImage:
     def _between(self) -> bool:
         return self.holds and (self.scan is None or self.values["cycle_done"] == self.scan)
 
-    def refuse(self, where: str, why: str) -> None:
+    def refuse(self, where: str, why: str, access: str = "a write to") -> None:
+        """A PLC's request the server refused (`access`: "a write to", or "a read of" a tag no one has)."""
         with self._lock:
             self.refused += 1
-        _log.warning("gateway: refused a write to %s: %s", where, why)
+        _log.warning("gateway: refused %s %s: %s", access, where, why)
 
     def take_changed(self) -> dict:
         """Inputs changed since the last call (the server publishes them), in the tag map's order with the

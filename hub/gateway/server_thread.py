@@ -15,8 +15,7 @@ CALL_LIMIT = 5.0     # s for anything else asked of it
 
 def refuse_taken(host: str, port: int, failed: str) -> None:
     """Raise PlanthubError("{failed}: cause (…)") when the endpoint is taken: a server that binds with
-    SO_REUSEPORT (snap7) would share it silently, one that is waited for (cpppo) would be taken for
-    whatever holds it. A stopped gateway's TIME_WAIT is no owner."""
+    SO_REUSEPORT (snap7) would share it silently. A stopped gateway's TIME_WAIT is no owner."""
     with socket.socket() as probe:
         probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
@@ -29,7 +28,7 @@ class ServerThread:
     """Runs `protocol` (an object with async start(), publish(changed) and stop()) in a thread.
     `publish` is a coroutine run in the loop where the server's state is the loop's alone (asyncua),
     or a plain method run in the plant's thread where the server guards its state itself or answers
-    from the process image (snap7's area locks, Modbus, cpppo)."""
+    from the process image (snap7's area locks, Modbus, EtherNet/IP)."""
 
     def __init__(self, protocol, what: str):
         self.protocol, self.what = protocol, what
