@@ -8,6 +8,7 @@ import socket
 import subprocess
 import sys
 import textwrap
+import time
 
 import pytest
 
@@ -101,6 +102,31 @@ def test_bad_logix_writes_get_their_cip_status_and_nothing_reaches_the_plant(tmp
     assert "refused a write to label (EtherNet/IP): 0x09 invalid attribute value: 17 bytes is longer than 16" in logged
     assert "refused a write to label (EtherNet/IP): 0x09 invalid attribute value: 'utf-8' codec can't decode" in logged
     assert logging.getLogger("enip.lgx").propagate   # as it was before the server: restored by its stop
+
+
+GONE = """
+import os
+from pylogix import PLC
+c = PLC("127.0.0.1")
+c.Port = PORT
+print(c.Read("cycle").Status, flush=True)
+os._exit(0)   # no Forward Close, no unregistering: as a PLC that crashes
+"""
+
+
+def test_a_clients_cip_connection_ends_with_its_tcp_connection(tmp_path):
+    tags = tag_map(load_scenario(belt_scenario(tmp_path)), "plc")
+    port = free_port()
+    server = EnipServer(ProcessImage(tags), f"127.0.0.1:{port}")
+    with ServerThread(server, "enip"):
+        for _ in range(2):
+            proc = subprocess.run([sys.executable, "-c", textwrap.dedent(GONE).replace("PORT", str(port))],
+                                  capture_output=True, text=True, cwd=ROOT, timeout=60)
+            assert proc.stdout == "Success\n", proc.stderr[-2000:]
+            deadline = time.monotonic() + 10.0
+            while server.adapter.connections.active_connections and time.monotonic() < deadline:
+                time.sleep(0.01)
+            assert server.adapter.connections.active_connections == []
 
 
 def test_an_enip_gateway_on_a_taken_port_does_not_start_naming_the_endpoint(tmp_path):

@@ -23,6 +23,7 @@ they are; the Logix tags are this file's (`_Tags`).
 from __future__ import annotations
 
 import asyncio
+import contextvars
 import math
 import struct
 
@@ -75,8 +76,10 @@ class EnipServer:
 
 
 class _Adapter(EipAdapter):
-    """cm-ethernetip's TCP server, which closes its clients' connections when it stops (asyncio's
-    server only stops listening) and holds a poll of `cycle` between two scans."""
+    """cm-ethernetip's TCP server, which holds a poll of `cycle` between two scans, closes the CIP
+    connections a client opened when its TCP connection ends (as a Logix controller does: a PLC that
+    restarts may open its connection again), and closes its clients' TCP connections when it stops
+    (asyncio's server only stops listening)."""
 
     def __init__(self, tags: _Tags, image: ProcessImage):
         super().__init__(tags, IDENTITY)
@@ -84,21 +87,36 @@ class _Adapter(EipAdapter):
         cycle = image.tags.by_slot["cycle"].name.lower().encode()
         self.poll = bytes([0x91, len(cycle)]) + cycle   # `cycle`'s ANSI symbolic segment in a request
         self.writers = set()
+        self.connections = tags.connections
         # A connected reply carries the connection id the client chose for it (a Logix MSG instruction
         # ignores any other): the Connection Manager's record of the Forward Open has it
         self.connection_id_lookup = lambda ot: getattr(tags.connections.find_by_ot_id(ot), "to_connection_id", 0)
 
     async def _handle_client(self, reader, writer) -> None:
         self.writers.add(writer)
+        opened = _OPENED.set([])
         try:
             await super()._handle_client(_Polls(reader, self.image, self.poll), writer)
         finally:
             self.writers.discard(writer)
+            for conn in _OPENED.get():   # a Logix controller closes a client's connections with its TCP session
+                if self.connections.find_by_ot_id(conn.ot_connection_id) is conn:
+                    self.connections.remove_connection(conn)
+            _OPENED.reset(opened)
+
+    def _dispatch_message(self, msg, session_handle: int, local_addr: str):
+        before = set(map(id, self.connections.active_connections))
+        response = super()._dispatch_message(msg, session_handle, local_addr)
+        _OPENED.get().extend(c for c in self.connections.active_connections if id(c) not in before)
+        return response
 
     async def close(self) -> None:
         for writer in list(self.writers):
             writer.close()
         await super().close()
+
+
+_OPENED = contextvars.ContextVar("opened")   # the CIP connections a client opened over its TCP connection
 
 
 class _Polls:
