@@ -12,8 +12,8 @@ refusal is logged and nothing reaches the plant; bits of a written byte that no 
 padding bytes that keep numbers at even bytes, are ignored (a write of nothing but them is refused).
 A write of several items in one request and a block download are refused whole, with the PDU error
 0x8104 "function not supported" (snap7 would apply the first item only, and a download unchecked).
-In lockstep a read of the markers over `cycle` (one item) between two scans is held until the next
-begins (`image.py`).
+In lockstep a read over `cycle` in its area (one item; the tag map puts it in the markers) between two
+scans is held until the next begins (`image.py`).
 
 python-snap7 3.3.0's server has no hook for writes (its `set_rw_area_callback` is a stub), so
 `_Server` overrides its write handler, and keeps the bit of a bit-sized write that it would drop.
@@ -156,7 +156,7 @@ class _Server(Server):
         if request["parameters"].get("item_count", 1) == 1:
             at = self._parse_read_address(request)
             cycle = self.gateway.cycle
-            if at and (at[0], at[1]) == _AREAS[S7_MARKERS][1:] and at[2] < cycle.s7_byte + cycle.s7_size \
+            if at and (at[0], at[1]) == _AREAS[cycle.s7_area][1:] and at[2] < cycle.s7_byte + cycle.s7_size \
                     and cycle.s7_byte < at[2] + at[3]:
                 self.gateway.image.hold()   # lockstep: held while the plant steps to its next scan (hub/gateway/image.py)
         return super()._handle_read_area(request, client_address)
