@@ -7,8 +7,8 @@ It polls: one Read of `cycle` and the readers' tags, which the gateway holds whi
 toward its next scan and answers once the scan's values are there (so it finds each scan as soon as
 the plant is at it, and no poll in between costs the plant anything). A scan's commands and
 `cycle_done` go in one write, a command only when it changes (the gateway keeps the last value
-written). A subscription (publishing interval 0) works as well, at some more cost: with a scan every
-step the plant's first 20 s took 9 % more wall (one run each), a PublishRequest to answer besides."""
+written). A subscription (publishing interval 0) works as well, at some more cost: a PublishRequest
+to answer besides."""
 from __future__ import annotations
 
 import asyncio
@@ -20,6 +20,7 @@ from asyncua import Client, ua
 from tests.plc.routing import Routing, arguments, read_tags
 
 POLL = 0.0005   # s before polling again when a poll found no new scan
+
 
 async def main(args) -> int:
     tags = read_tags(args.tags)
