@@ -1,17 +1,20 @@
 """A PLC's poll of `cycle` in lockstep, over each protocol: made while the plant steps toward its next
 scan (the PLC answered the last), it is held by the gateway and answered with the next scan's
-number as soon as that scan begins, while the server goes on answering other clients; in live mode
-it is answered at once. The hold has a limit and ends with the run. A real server in this process,
+values as soon as that scan begins, while the server goes on answering other clients; in live mode
+it is answered at once. The hold has a limit and ends with the run. The gateway participant is
+stepped as a run steps it (Participant.advance → Gateway.step), a real server in this process,
 real clients of the protocol in other processes."""
 import subprocess
 import sys
 import textwrap
-import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
+from hub.core.slots import SlotType
 from hub.gateway.image import ProcessImage
+from hub.gateway.participant import LIVE, Gateway
 from hub.gateway.server_thread import ServerThread
 from hub.gateway.tags import namespace, tag_map
 from hub.scenario.checker import load_scenario
@@ -21,31 +24,37 @@ from .helpers import ROOT
 
 LIMIT = 60.0  # s for anything the test waits on
 HOLD = 2 * LIMIT   # s: a hold that is not ended by its scan outlasts every wait of the test
+STEP = 0.02   # s of plant time a step
+PAUSE = 0.2   # s the plant's thread stays in a scan's beginning: a read it lets go on is answered meanwhile
 
-READ = {   # a client reading a tag (`cycle`, unless told) once and printing it (the placeholders filled in below)
+READ = {   # a client printing the values of the tags P names, read in one request (P is set before it)
     "modbus": """
         from pymodbus.client import ModbusTcpClient
-        c = ModbusTcpClient("127.0.0.1", port=PORT, timeout=60, retries=0)
+        c = ModbusTcpClient("127.0.0.1", port=P["port"], timeout=60, retries=0)
         assert c.connect()
-        print(c.read_input_registers(ADDRESS, count=1).registers[0])""",
+        first = min(P["addresses"])
+        words = c.read_input_registers(first, count=max(P["addresses"]) - first + 1).registers
+        print(*[words[a - first] for a in P["addresses"]])""",
     "s7": """
         import struct, snap7
         from snap7.type import Area
+        (area, byte), = P["s7"]   # one item: S7 holds no other
         c = snap7.Client()
-        c.connect("127.0.0.1", 0, 1, PORT)
-        print(struct.unpack(">H", c.read_area(Area.AREA, 0, BYTE, 2))[0])""",
+        c.connect("127.0.0.1", 0, 1, P["port"])
+        print(struct.unpack(">H", c.read_area(getattr(Area, area), 0, byte, 2))[0])""",
     "enip": """
         from pylogix import PLC
         with PLC("127.0.0.1") as c:
-            c.Port, c.SocketTimeout = PORT, 60
-            print(c.Read("TAG").Value)""",
+            c.Port, c.SocketTimeout = P["port"], 60
+            names = P["names"]
+            print(*[r.Value for r in (c.Read(names) if len(names) > 1 else [c.Read(names[0])])])""",
     "opcua": """
         import asyncio
         from asyncua import Client, ua
         async def main():
-            async with Client("ENDPOINT", timeout=60) as c:
-                ns = await c.get_namespace_index("NAMESPACE")
-                print(await c.get_node(ua.NodeId("NODE", ns)).read_value())
+            async with Client(P["endpoint"], timeout=60) as c:
+                ns = await c.get_namespace_index(P["namespace"])
+                print(*await c.read_values([c.get_node(ua.NodeId(node, ns)) for node in P["nodes"]]))
         asyncio.run(main())""",
 }
 
@@ -64,24 +73,61 @@ def server_of(protocol: str, image: ProcessImage, port: int):
     return OpcUaServer(image, f"opc.tcp://127.0.0.1:{port}/planthub")
 
 
-def scan(server, image: ProcessImage, cycle: int) -> None:
-    """What the gateway does at a scan (hub/gateway/participant.py): the number put, published, begun."""
-    image.put({"cycle": cycle})
-    server.publish(image.take_changed())
-    image.begin_scan(cycle)
+class Plant:
+    """The gateway participant stepped as a run steps it (Participant.advance, which calls Gateway.step),
+    in a thread of its own: at a scan the step waits until the PLC answers. A listener of the image
+    (after the server's) keeps the plant's thread PAUSE s in each scan's beginning, as if preempted
+    there: a step that began a scan before its values were put and published would have a held read
+    answered with the scan before's."""
+
+    def __init__(self, gateway: Gateway):
+        self.gateway, self.image = gateway, gateway.image
+        self.image.listen(lambda: time.sleep(PAUSE))
+        self.inputs, _ = gateway.interface()
+        gateway.begin({}, 0.0)
+        self.thread = ThreadPoolExecutor(1)
+        self.t = 0.0
+
+    def step(self, **inputs):
+        """A step with these inputs (an event: True), the others at rest; its future."""
+        values = [inputs.get(name, False if kind is SlotType.VOID else kind.initial()) for name, kind in self.inputs]
+        future = self.thread.submit(self.gateway.advance, self.t, STEP, values)
+        self.t += STEP
+        return future
+
+    def answer(self, cycle: int) -> None:
+        """The PLC answers scan `cycle` once it began (cycle_done written, as the server would)."""
+        until(lambda: self.image.at_scan == cycle, f"scan {cycle} did not begin")
+        self.image.write("cycle_done", cycle)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.image.write("cycle_done", self.gateway.cycle)   # a step left waiting (a failed test) ends
+        self.thread.shutdown()
 
 
-def reader(protocol: str, tags, port: int, slot: str = "cycle") -> subprocess.Popen:
-    tag = tags.by_slot[slot]
-    code = textwrap.dedent(READ[protocol]).replace("PORT", str(port)).replace("ADDRESS", str(tag.address)) \
-        .replace("BYTE", str(tag.s7_byte)).replace("ENDPOINT", f"opc.tcp://127.0.0.1:{port}/planthub") \
-        .replace("NAMESPACE", namespace(tags.run)).replace("NODE", tag.node_id).replace("TAG", tag.name) \
-        .replace("AREA", {"I": "PE", "Q": "PA", "M": "MK"}.get(tag.s7_area, ""))
+def until(condition, failed: str) -> None:
+    deadline = time.monotonic() + LIMIT
+    while not condition():
+        assert time.monotonic() < deadline, failed
+        time.sleep(0.01)
+
+
+def reader(protocol: str, tags, port: int, *slots: str) -> subprocess.Popen:
+    """A client process reading these tags (`cycle` if none) in one request."""
+    chosen = [tags.by_slot[slot] for slot in slots or ("cycle",)]
+    params = {"port": port, "addresses": [t.address for t in chosen], "names": [t.name for t in chosen],
+              "s7": [({"I": "PE", "Q": "PA", "M": "MK"}[t.s7_area], t.s7_byte) for t in chosen],
+              "endpoint": f"opc.tcp://127.0.0.1:{port}/planthub", "namespace": namespace(tags.run),
+              "nodes": [t.node_id for t in chosen]}
+    code = f"P = {params!r}\n" + textwrap.dedent(READ[protocol])
     return subprocess.Popen([sys.executable, "-c", code], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
 
 
-def answer(client: subprocess.Popen) -> int:
+def answer(client: subprocess.Popen) -> list[int]:
     try:
         out, err = client.communicate(timeout=LIMIT)   # less than HOLD: a read answered by its hold's end fails here
     finally:
@@ -89,7 +135,12 @@ def answer(client: subprocess.Popen) -> int:
             client.kill()
             client.communicate()
     assert client.returncode == 0, err[-2000:]
-    return int(out.strip())
+    return [int(v) for v in out.split()]
+
+
+def until_held(image: ProcessImage, client: subprocess.Popen, count: int = 1) -> None:
+    until(lambda: image.held_reads >= count or client.poll() is not None, "the read of cycle was not held")
+    assert image.held_reads == count, f"the read of cycle was not held (the client ended with {client.poll()})"
 
 
 @pytest.fixture(scope="module")
@@ -99,44 +150,62 @@ def tags():
 
 @pytest.mark.parametrize("protocol", ["modbus", "s7", "enip", "opcua"])
 def test_a_poll_between_two_scans_is_answered_with_the_next_scan_once_it_begins(protocol, tags):
-    image, port = ProcessImage(tags, hold=HOLD), free_port()
-    image.holds = True   # lockstep
-    with ServerThread(server_of(protocol, image, port), protocol) as server:
-        scan(server, image, 1)
-        image.write("cycle_done", 1)   # the PLC answered scan 1: the plant steps toward scan 2
+    image, port = ProcessImage(tags, lockstep=True, hold=HOLD), free_port()
+    with ServerThread(server_of(protocol, image, port), protocol) as server, \
+            Plant(Gateway(tags, server, plc_timeout=LIMIT)) as plant:
+        first = plant.step(r1_read=True)   # scan 1: a bottle at reader 1
+        plant.answer(1)
+        first.result(LIMIT)   # the plant steps toward scan 2
         client = reader(protocol, tags, port)
-        deadline = time.monotonic() + LIMIT
-        while image.held == 0 and client.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.01)
-        assert image.held == 1, f"the read of cycle was not held (the client ended with {client.poll()})"
-        image.put({"r1_read": 7})
-        server.publish(image.take_changed())
-        assert answer(reader(protocol, tags, port, "r1_read")) == 7   # another client, answered meanwhile
-        assert client.poll() is None and image.held == 1   # the first one still held
-        scan(server, image, 2)
-        assert answer(client) == 2   # asked before scan 2 began, answered with it
+        until_held(image, client)
+        assert answer(reader(protocol, tags, port, "r1_read")) == [1]   # another client, answered meanwhile
+        assert client.poll() is None and image.held_reads == 1   # the first one still held
+        second = plant.step()   # scan 2
+        assert answer(client) == [2]   # asked before scan 2 began, answered with it
+        plant.answer(2)
+        second.result(LIMIT)
+
+
+@pytest.mark.parametrize("protocol", ["modbus", "enip", "opcua"])   # S7 holds a read of one item only
+def test_a_held_poll_of_cycle_and_an_input_is_answered_with_the_next_scans_value_of_both(protocol, tags):
+    image, port = ProcessImage(tags, lockstep=True, hold=HOLD), free_port()
+    with ServerThread(server_of(protocol, image, port), protocol) as server, \
+            Plant(Gateway(tags, server, plc_timeout=LIMIT)) as plant:
+        first = plant.step()   # scan 1: no bottle yet
+        plant.answer(1)
+        first.result(LIMIT)
+        client = reader(protocol, tags, port, "cycle", "r1_read")   # one request for both
+        until_held(image, client)
+        second = plant.step(r1_read=True)   # scan 2: a bottle at reader 1
+        assert answer(client) == [2, 1]
+        plant.answer(2)
+        second.result(LIMIT)
 
 
 @pytest.mark.parametrize("protocol", ["modbus", "opcua"])
 def test_in_live_mode_a_poll_is_answered_at_once(protocol, tags):
-    image, port = ProcessImage(tags, hold=HOLD), free_port()   # image.holds stays False: live
-    with ServerThread(server_of(protocol, image, port), protocol) as server:
-        scan(server, image, 1)
-        image.write("cycle_done", 1)
-        assert answer(reader(protocol, tags, port)) == 1 and image.held == 0
+    image, port = ProcessImage(tags, hold=HOLD), free_port()   # not lockstep: live
+    with ServerThread(server_of(protocol, image, port), protocol) as server, \
+            Plant(Gateway(tags, server, mode=LIVE)) as plant:
+        plant.step(r1_read=True).result(LIMIT)   # no scan: the plant does not wait for the PLC
+        assert answer(reader(protocol, tags, port, "cycle", "r1_read")) == [0, 1] and image.held_reads == 0
 
 
-def test_a_hold_ends_at_its_limit_and_at_the_end_of_the_run(tags):
-    image = ProcessImage(tags, hold=0.05)
-    image.holds = True
+@pytest.mark.parametrize("protocol", ["modbus", "s7", "enip", "opcua"])
+def test_a_poll_held_when_the_run_ends_is_answered_then(protocol, tags):
+    image, port = ProcessImage(tags, lockstep=True, hold=HOLD), free_port()
+    with ServerThread(server_of(protocol, image, port), protocol) as server, \
+            Plant(Gateway(tags, server, plc_timeout=LIMIT)) as plant:
+        first = plant.step()
+        plant.answer(1)
+        first.result(LIMIT)
+        client = reader(protocol, tags, port)
+        until_held(image, client)
+        image.release()   # the run ended (hub/cli/gateway.py)
+        assert answer(client) == [1]   # within LIMIT, less than HOLD: only the release ends it in time
+
+
+def test_a_hold_ends_at_its_limit(tags):
+    image = ProcessImage(tags, lockstep=True, hold=0.05)
     image.hold()   # no scan yet: held for its limit, then answered
-    assert image.held == 1
-    image.hold_limit = HOLD
-    waiting = threading.Thread(target=image.hold)
-    waiting.start()
-    deadline = time.monotonic() + LIMIT
-    while image.held < 2 and time.monotonic() < deadline:
-        time.sleep(0.01)
-    image.release()   # the run ended
-    waiting.join(LIMIT)   # less than HOLD: only release() ends it in time
-    assert image.held == 2 and not waiting.is_alive()
+    assert image.held_reads == 1

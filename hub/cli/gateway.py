@@ -100,7 +100,7 @@ def run(args) -> int:
             parser.error("--user: only for opcua, with the password in PLANTHUB_OPCUA_PASSWORD")
         user = (args.user, password)
     certificates = _certificates(parser, args)
-    image = ProcessImage(tags)
+    image = ProcessImage(tags, lockstep=args.sync == "lockstep")
     endpoint = args.endpoint or ENDPOINTS[args.protocol]
     protocol = _server(args.protocol, image, endpoint, user, certificates)
     ready_timeout = _ready_timeout(args)

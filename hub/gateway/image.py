@@ -5,7 +5,9 @@ The plant side (the participant, in the serve loop's thread) puts the PLC's inpu
 outputs; the protocol side (the server's event-loop thread) reads the inputs and writes the outputs.
 One lock guards both; a condition wakes the plant when the PLC writes a handshake tag (only those
 are waited on), and a PLC's read of `cycle` held between two scans (`hold`) when the next begins.
-Every wait has a limit.
+`hold` is called by a protocol server's thread (snap7's) or a thread of its event loop's pool
+(Modbus, EtherNet/IP), `begin_hold` by OPC UA's event loop; `begin_scan` and `release` by the
+plant's thread alone. Every wait has a limit.
 """
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ HOLD = 0.1   # s at most that a PLC's read of `cycle` is held for the next scan
 
 
 class ProcessImage:
-    def __init__(self, tags: TagMap, hold: float = HOLD):
+    def __init__(self, tags: TagMap, lockstep: bool = False, hold: float = HOLD):
         self.tags = tags
         self.values = {t.slot: (0 if t.type is SlotType.VOID and t.direction == INPUT else
                                 False if t.type is SlotType.VOID else t.type.initial()) for t in tags.tags}
@@ -35,10 +37,11 @@ class ProcessImage:
         # at the GIL; the plant waits on handshake tags alone, so only they wake it.
         self._wakers = frozenset(t.slot for t in tags.tags if t.handshake)
         self._order = [t.slot for t in tags.tags if not t.handshake] + [t.slot for t in tags.tags if t.handshake]
-        self.holds = False   # lockstep: a read of `cycle` between two scans is held for the next
+        self.holds = lockstep   # a read of `cycle` between two scans is held for the next (until `release`)
         self.hold_limit = hold
-        self.scan = None     # the scan the plant is at or last was (None: none yet)
-        self.held = 0        # reads of `cycle` that waited for a scan
+        self.at_scan = None     # the scan the plant is at or last was (None: none yet)
+        self.held_reads = 0     # reads of `cycle` that were held for a scan
+        self._listeners = ()    # called when a scan begins and when the run ends (`listen`)
 
     # --- the protocol side
     def read(self, slot: str):
@@ -60,13 +63,20 @@ class ProcessImage:
         answered last."""
         deadline = time.monotonic() + self.hold_limit
         with self._lock:
-            if self._between():
-                self.held += 1
+            if not self._begin_hold():
+                return
             while self._between():
                 left = deadline - time.monotonic()
                 if left <= 0:
                     return
                 self._lock.wait(left)
+
+    def begin_hold(self) -> bool:
+        """A PLC's read of `cycle` for a server that waits in its own way (OPC UA, in its event loop):
+        True if it is to be held (counted in `held_reads`); the server then lets it go on when a
+        listener (`listen`) is called, or after `hold_limit` s."""
+        with self._lock:
+            return self._begin_hold()
 
     def between_scans(self) -> bool:
         """Lockstep, and the plant steps toward its next scan: it has none yet, or the PLC answered
@@ -74,8 +84,21 @@ class ProcessImage:
         with self._lock:
             return self._between()
 
+    def listen(self, listener) -> None:
+        """Call `listener()` when a scan begins and when the run ends, in the plant's thread."""
+        self._listeners = (*self._listeners, listener)   # a new tuple: the plant's thread may be calling them
+
+    def unlisten(self, listener) -> None:
+        self._listeners = tuple(k for k in self._listeners if k is not listener)
+
+    def _begin_hold(self) -> bool:
+        if self._between():
+            self.held_reads += 1
+            return True
+        return False
+
     def _between(self) -> bool:
-        return self.holds and (self.scan is None or self.values["cycle_done"] == self.scan)
+        return self.holds and (self.at_scan is None or self.values["cycle_done"] == self.at_scan)
 
     def refuse(self, where: str, why: str, access: str = "a write to") -> None:
         """A PLC's request the server refused (`access`: "a write to", or "a read of" a tag no one has)."""
@@ -103,14 +126,18 @@ class ProcessImage:
     def begin_scan(self, cycle: int) -> None:
         """The plant is at scan `cycle`, its values published: the reads held for it go on."""
         with self._lock:
-            self.scan = cycle
+            self.at_scan = cycle
             self._lock.notify_all()
+        for listener in self._listeners:
+            listener()
 
     def release(self) -> None:
         """The run is over: no read is held any more."""
         with self._lock:
             self.holds = False
             self._lock.notify_all()
+        for listener in self._listeners:
+            listener()
 
     def outputs(self) -> dict:
         """The PLC's outputs for this step; a command bit fires on its rising edge."""

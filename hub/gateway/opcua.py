@@ -8,7 +8,8 @@ writable. A write is refused with the protocol's own status: an unknown node Bad
 PLC input BadUserAccessDenied (asyncua, for every user but an admin), a value of another type
 BadTypeMismatch, a value out of the tag's range or not finite BadOutOfRange; each refusal is logged
 and nothing reaches the plant. Clients subscribe with their own sampling interval. In lockstep a
-Read of `cycle`'s value between two scans waits, in the server's event loop, until the next begins.
+Read of `cycle`'s value between two scans (as the process image decides) waits, in the server's event
+loop, until the next begins.
 
 Security: with `Certificates` the endpoint offers Basic256Sha256 Sign and SignAndEncrypt only, the
 server's application URI taken from its certificate; a client's certificate must be valid (its time
@@ -47,8 +48,8 @@ class OpcUaServer:
         self.image, self.endpoint, self.user, self.certificates = image, endpoint, user, certificates
         self.server = None
         self.nodes = {}        # slot → NodeId
-        self.published = None  # the last `cycle` published (None: none yet)
-        self.held = []         # the futures of the reads of `cycle` held for the next scan
+        self.waiting = []      # the futures of the reads of `cycle` held for the next scan
+        self._wake = None      # the image's listener: the held reads go on (in this server's loop)
 
     async def start(self) -> None:
         users = _Users(self.user, secured=self.certificates is not None,
@@ -90,6 +91,9 @@ class OpcUaServer:
         server.subscribe_server_callback(CallbackType.PreRead, self._hold)
         await server.start()
         self.server = server
+        loop = asyncio.get_running_loop()
+        self._wake = lambda: loop.call_soon_threadsafe(self._go_on)
+        self.image.listen(self._wake)
 
     @staticmethod
     async def _secure(server: Server, certificates: Certificates) -> None:
@@ -107,34 +111,34 @@ class OpcUaServer:
         for slot, value in changed.items():
             tag = self.image.tags.by_slot[slot]
             await self.server.write_attribute_value(self.nodes[slot], ua.DataValue(ua.Variant(value, _VARIANT[tag.opcua_type])))
-        if "cycle" in changed:   # a scan begins: the reads held for it go on
-            self.published = changed["cycle"]
-            self._go_on()
 
     def _go_on(self) -> None:
-        held, self.held = self.held, []
-        for future in held:
+        waiting, self.waiting = self.waiting, []
+        for future in waiting:
             if not future.done():
                 future.set_result(None)
 
     async def _hold(self, event, _dispatcher) -> None:
         """A Read of `cycle`'s value while the plant steps to its next scan waits for it (as
-        ProcessImage.hold does in the other protocols' threads, here in the server's event loop)."""
+        ProcessImage.hold does in the other protocols' threads, here in the server's event loop),
+        until the image's listener wakes it: the scan began (its values published) or the run ended."""
         cycle = self.nodes["cycle"]
         if not any(r.NodeId == cycle and r.AttributeId == ua.AttributeIds.Value for r in event.request_params.NodesToRead):
             return
-        if not self.image.holds or self.published not in (None, self.image.read("cycle_done")):
+        if not self.image.begin_hold():
             return
         future = asyncio.get_running_loop().create_future()
-        self.held.append(future)
-        self.image.held += 1   # (only this loop's thread counts them: one protocol to a gateway)
+        self.waiting.append(future)   # before the loop runs a wake the plant may have sent since begin_hold
         try:
             await asyncio.wait_for(future, self.image.hold_limit)
         except TimeoutError:
-            if future in self.held:
-                self.held.remove(future)
+            if future in self.waiting:
+                self.waiting.remove(future)
 
     async def stop(self) -> None:
+        if self._wake is not None:
+            self.image.unlisten(self._wake)
+            self._wake = None
         self._go_on()   # a read held for a next scan is answered now
         if self.server is not None:
             await self.server.stop()

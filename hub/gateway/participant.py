@@ -8,7 +8,10 @@ the gateway raises `cycle` and holds the plant until the PLC writes that number 
 long as the PLC writes only between seeing a new cycle and answering it. In *live* mode it never
 holds: the run is paced to the wall clock (`planthub run --realtime`) and the PLC reads and writes
 whenever it scans, as against a real plant. The PLC's outputs are taken at every step; a command
-bit fires its event once per rising edge.
+bit fires its event once per rising edge. `step` runs in the plant's thread (the one `serve` steps
+the gateway in), which alone begins a scan in the image (`begin_scan`) and, when the run ends,
+releases it (`release`, hub/cli/gateway.py); a PLC's read of `cycle` is held (`hold`) in a protocol
+server's thread or a thread of its event loop's pool (OPC UA's in its event loop, by `begin_hold`).
 """
 from __future__ import annotations
 
@@ -24,7 +27,9 @@ class Gateway(Participant):
                  plc_timeout: float = 0.5, ready_timeout: float = 30.0):
         self.tags, self.server, self.mode = tags, server, mode
         self.image = server.protocol.image
-        self.image.holds = mode == LOCKSTEP
+        if self.image.holds != (mode == LOCKSTEP):
+            raise ValueError(f"a {mode} gateway on a process image that {'holds' if self.image.holds else 'never holds'}"
+                             f" reads of cycle: ProcessImage(tags, lockstep={mode == LOCKSTEP})")
         self.scan, self.plc_timeout, self.ready_timeout = scan, plc_timeout, ready_timeout
         plain = [t for t in tags.tags if not t.handshake]
         self.inputs = {t.slot: t.type.value for t in plain if t.direction == "input"}
