@@ -78,13 +78,14 @@ def test_a_browser_gets_hello_then_the_scene_then_bodies_events_and_belt_speeds(
         while not all(seen.values()):
             frame = await wait_for(ws, lambda f: True, what="frames")
             kind = "bytes" if isinstance(frame, bytes) else frame["type"]
+            if kind == "bytes" and not all(bodies(frame, scene)):
+                continue   # the plant at tick 0, or no bottle out yet (the view may join before the first step)
             if kind in seen:
                 seen[kind].append(frame)
         return scene, seen
 
-    scene, seen = talk(url, conversation)
+    scene, seen = talk(url, conversation)   # (a bodies message with bottles in play comes within wait_for's limit)
     tick, positions = bodies(seen["bytes"][0], scene)
-    assert tick > 0 and positions, "a bodies message with bottles in play"
     assert all(len(p) == 3 and abs(p[1]) < 0.06 and 0.0 < p[2] < 0.2 for p in positions.values()), positions
     assert all(len(row) == 3 and isinstance(row[0], int) for row in seen["events"][0]["rows"])
     assert {r[1] for f in seen["events"] for r in f["rows"]} <= {"source.store.released", "source.store.waiting",
