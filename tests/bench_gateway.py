@@ -28,13 +28,8 @@ def gateway() -> dict:
     walls = {name: [] for name, _, _ in WAYS}
     ratios = {name: [] for name, _, _ in WAYS}
     with tempfile.TemporaryDirectory() as tmp:
-        runs = 0
-
         def wall(protocol, extra):
-            nonlocal runs
-            runs += 1
-            folder = Path(tmp) / str(runs)
-            folder.mkdir()
+            folder = Path(tempfile.mkdtemp(dir=tmp))
             return bottling_via_gateway(folder, protocol, DURATION, *extra)[2]["wall"]["seconds"]
 
         floor_name = WAYS[0][0]
