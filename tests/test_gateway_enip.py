@@ -3,7 +3,6 @@ another process (a real server), every kind of bad request refused with CIP's ow
 logged, nothing of it reaching the plant, strings in UTF-8 both ways; a taken port refused naming
 it; and the bottling plant routed by a Logix PLC client scanning every 0.1 s (at every step:
 tests/test_gateway_plant.py)."""
-import logging
 import socket
 import subprocess
 import sys
@@ -101,15 +100,74 @@ def test_bad_logix_writes_get_their_cip_status_and_nothing_reaches_the_plant(tmp
     assert "refused a write to speed (EtherNet/IP): 0xFF general error, extended status 0x2105: 2 elements written to a tag of one" in logged
     assert "refused a write to label (EtherNet/IP): 0x09 invalid attribute value: 17 bytes is longer than 16" in logged
     assert "refused a write to label (EtherNet/IP): 0x09 invalid attribute value: 'utf-8' codec can't decode" in logged
-    assert logging.getLogger("enip.lgx").propagate   # as it was before the server: restored by its stop
+
+
+UNREADABLE = r"""
+import socket, struct
+
+def frame(command, payload, session=0):
+    return struct.pack("<HHIIQI", command, len(payload), session, 0, 7, 0) + payload
+
+def unconnected(mr):   # SendRRData's interface, timeout and two items: a null address and the request
+    return struct.pack("<IHHHHHH", 0, 0, 2, 0, 0, 0xB2, len(mr)) + mr
+
+def answer(s):
+    head = s.recv(24, socket.MSG_WAITALL)
+    if len(head) < 24:
+        return "closed"
+    length, status = struct.unpack_from("<H", head, 2)[0], struct.unpack_from("<I", head, 8)[0]
+    body = s.recv(length, socket.MSG_WAITALL)
+    return status, body[16:].hex()   # the Message Router's answer, after the items' headers
+
+said = {}
+with socket.create_connection(("127.0.0.1", PORT), timeout=10) as s:
+    s.sendall(frame(0x65, struct.pack("<HH", 1, 0)))   # RegisterSession
+    handle = struct.unpack_from("<I", s.recv(28, socket.MSG_WAITALL), 4)[0]
+    for what, mr in [("a name not ASCII", bytes([0x4C, 2, 0x91, 2, 0xE9, 0x78, 1, 0])),
+                     ("a segment cut short", bytes([0x4C, 1, 0x21, 0, 1, 0])),   # a 16-bit class id of no bytes
+                     ("a Forward Open cut short", bytes([0x54, 2, 0x20, 0x06, 0x24, 0x01, 0, 0, 0, 0])),
+                     ("another service on a tag", bytes([0x0E, 4, 0x91, 5]) + b"cycle\x00"),
+                     ("then a good read", bytes([0x4C, 4, 0x91, 5]) + b"cycle\x00" + bytes([1, 0]))]:
+        s.sendall(frame(0x6F, unconnected(mr), handle))
+        said[what] = answer(s)
+    s.sendall(frame(0x6F, b"\x00\x00", handle))
+    said["a frame too short"] = answer(s)
+with socket.create_connection(("127.0.0.1", PORT), timeout=10) as s:
+    s.sendall(frame(0x9999, b""))
+    said["a command no one has"] = answer(s)
+print(repr(said))
+"""
+
+
+def test_requests_and_frames_the_enip_server_cannot_read_are_answered_or_closed_and_logged(tmp_path, caplog):
+    tags = tag_map(load_scenario(belt_scenario(tmp_path)), "plc")
+    image, port = ProcessImage(tags), free_port()
+    with ServerThread(EnipServer(image, f"127.0.0.1:{port}"), "enip"):
+        proc = subprocess.run([sys.executable, "-c", UNREADABLE.replace("PORT", str(port))],
+                              capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert eval(proc.stdout) == {
+        "a name not ASCII": (3, ""), "a segment cut short": (3, ""), "a Forward Open cut short": (3, ""),   # incorrect data
+        "another service on a tag": (0, "8e000800"),   # the connection goes on: CIP's 0x08 service not supported
+        "then a good read": (0, "cc000000c40000000000"), "a frame too short": "closed", "a command no one has": "closed"}
+    assert image.refused == 6 and image.outputs() == {"speed": 0.0, "run": False}
+    logged = caplog.text
+    for line in ["a request (EtherNet/IP): encapsulation status 0x0003 incorrect data: 'ascii' codec can't decode byte 0xe9",
+                 "a request (EtherNet/IP): encapsulation status 0x0003 incorrect data: unpack_from requires a buffer",
+                 "a request (EtherNet/IP): encapsulation status 0x0003 incorrect data: Forward Open requires at least 36 bytes",
+                 "a request to cycle (EtherNet/IP): 0x08 service not supported: service 0x0E on a tag",
+                 "a frame (EtherNet/IP): a SEND_RR_DATA frame of 26 bytes is too short for its command; its connection is closed",
+                 "a frame (EtherNet/IP): 39321 is not a valid EncapsulationCommand; its connection is closed"]:
+        assert f"gateway: refused {line}" in logged
 
 
 GONE = """
-import os
+import os, sys
 from pylogix import PLC
 c = PLC("127.0.0.1")
 c.Port = PORT
-print(c.Read("cycle").Status, flush=True)
+print(c.Read("cycle").Status, flush=True)   # over the CIP connection pylogix opens with a Forward Open
+sys.stdin.readline()
 os._exit(0)   # no Forward Close, no unregistering: as a PLC that crashes
 """
 
@@ -120,9 +178,14 @@ def test_a_clients_cip_connection_ends_with_its_tcp_connection(tmp_path):
     server = EnipServer(ProcessImage(tags), f"127.0.0.1:{port}")
     with ServerThread(server, "enip"):
         for _ in range(2):
-            proc = subprocess.run([sys.executable, "-c", textwrap.dedent(GONE).replace("PORT", str(port))],
-                                  capture_output=True, text=True, cwd=ROOT, timeout=60)
-            assert proc.stdout == "Success\n", proc.stderr[-2000:]
+            with subprocess.Popen([sys.executable, "-c", textwrap.dedent(GONE).replace("PORT", str(port))], cwd=ROOT,
+                                  stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True) as proc:
+                try:
+                    assert proc.stdout.readline() == "Success\n"
+                    assert len(server.adapter.connections.active_connections) == 1   # its Forward Open's
+                    proc.communicate("\n", timeout=60)
+                finally:
+                    proc.kill()
             deadline = time.monotonic() + 10.0
             while server.adapter.connections.active_connections and time.monotonic() < deadline:
                 time.sleep(0.01)

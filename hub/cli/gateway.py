@@ -122,7 +122,7 @@ def run(args) -> int:
         finally:
             image.release()   # a read the PLC has held for a next scan is answered now
         if image.refused:
-            _log.warning(f"gateway {args.object!r}: {image.refused} writes refused (each logged above)")
+            _log.warning(f"gateway {args.object!r}: {image.refused} requests refused (each logged above)")
         return status
 
 

@@ -8,17 +8,20 @@ process image. A write is checked before it is taken, and refused with CIP's own
 PLC input 0x0F "privilege violation"; a value out of the tag's range, not finite, or a string too
 long or not UTF-8 0x09 "invalid attribute value"; a value of another type 0xFF with extended status
 0x2107, more than one element 0xFF 0x2105, too few bytes 0x13 "not enough data". A tag no one has
-is 0x05 "path destination unknown" for a read as for a write. Every refusal is logged, and nothing of
-it reaches the plant. An SSTRING's bytes are the string's UTF-8, both ways.
+is 0x05 "path destination unknown" for a read as for a write, another service on a tag 0x08 "service
+not supported". A request whose path or data cannot be read (a name not ASCII, a segment cut short, a
+Forward Open cut short) is answered with the encapsulation status 0x0003 "incorrect data", and a frame
+that cannot be read closes its connection. Every refusal is logged, and nothing of it reaches the
+plant. An SSTRING's bytes are the string's UTF-8, both ways.
 
 In lockstep a request naming `cycle` between two scans is held until the next begins (`image.py`), in
 a thread of the loop's pool while the loop answers other clients: every tag of it is then read from
 that scan.
 
-cm-ethernetip (pure Python, asyncio, `struct` framing) answers a request in ~0.1 ms of CPU where
-cpppo, the other pure-Python EtherNet/IP server, took 3-15 ms (its parser reads byte by byte); pycomm3
-and pylogix are clients only. Its Connection Manager, Message Router and encapsulation are used as
-they are; the Logix tags are this file's (`_Tags`).
+cm-ethernetip is a pure-Python asyncio server that frames with `struct` (cpppo, the other one, parses
+byte by byte and costs a lockstep PLC's scan several times more); pycomm3 and pylogix are clients
+only. Its Connection Manager, Message Router and encapsulation are used as they are; the Logix tags
+are this file's (`_Tags`).
 """
 from __future__ import annotations
 
@@ -27,6 +30,8 @@ import contextvars
 import math
 import struct
 
+from ethernetip.cip.encapsulation import SIZE as HEADER_SIZE
+from ethernetip.cip.encapsulation import EncapsulationCommand, EncapsulationHeader, EncapsulationStatus
 from ethernetip.cip.identity_info import IdentityInfo
 from ethernetip.cip.path import CipPath
 from ethernetip.cip.service import CipServiceResponse
@@ -34,10 +39,11 @@ from ethernetip.cip.status import CipStatus
 from ethernetip.connections.connection_manager import ConnectionManagerObject
 from ethernetip.logix.logix_dispatcher import LogixDispatcher
 from ethernetip.protocol.eip_adapter import EipAdapter
+from ethernetip.protocol.messages import EncapsulationMessageManager, SendUnitDataMessage
 
 from hub.core.slots import SlotType
 from hub.gateway.image import ProcessImage
-from hub.gateway.server_thread import refuse_taken
+from hub.gateway.server_thread import hold, refuse_taken
 from hub.gateway.tags import OUTPUT, Tag
 
 READ, WRITE, READ_FRAGMENTED, WRITE_FRAGMENTED = 0x4C, 0x4D, 0x52, 0x53
@@ -49,6 +55,7 @@ NAMES = {code: name for name, code in TYPES.items()}
 DINT = 2 ** 31
 FLOAT32 = struct.unpack("<f", b"\xff\xff\x7f\x7f")[0]   # REAL's largest finite value
 IDENTITY = IdentityInfo(device_type=0x0E, product_name="planthub gateway")   # 0x0E: a programmable logic controller
+UNREADABLE = (ValueError, struct.error, IndexError)   # what cm-ethernetip's parsers raise on bytes they cannot read
 
 
 class EnipServer:
@@ -83,6 +90,7 @@ class _Adapter(EipAdapter):
 
     def __init__(self, tags: _Tags, image: ProcessImage):
         super().__init__(tags, IDENTITY)
+        self._manager = _Frames()
         self.image = image
         cycle = image.tags.by_slot["cycle"].name.lower().encode()
         self.poll = bytes([0x91, len(cycle)]) + cycle   # `cycle`'s ANSI symbolic segment in a request
@@ -97,6 +105,8 @@ class _Adapter(EipAdapter):
         opened = _OPENED.set([])
         try:
             await super()._handle_client(_Polls(reader, self.image, self.poll), writer)
+        except UNREADABLE as exc:   # no way to find the next frame: the connection is closed (by the base's finally)
+            self.image.refuse("(EtherNet/IP)", f"{exc}; its connection is closed", access="a frame")
         finally:
             self.writers.discard(writer)
             for conn in _OPENED.get():   # a Logix controller closes a client's connections with its TCP session
@@ -106,7 +116,11 @@ class _Adapter(EipAdapter):
 
     def _dispatch_message(self, msg, session_handle: int, local_addr: str):
         before = set(map(id, self.connections.active_connections))
-        response = super()._dispatch_message(msg, session_handle, local_addr)
+        try:
+            response = super()._dispatch_message(msg, session_handle, local_addr)
+        except UNREADABLE as exc:
+            self.image.refuse("(EtherNet/IP)", f"encapsulation status 0x0003 incorrect data: {exc}", access="a request")
+            return _incorrect_data(msg)
         _OPENED.get().extend(c for c in self.connections.active_connections if id(c) not in before)
         return response
 
@@ -117,6 +131,28 @@ class _Adapter(EipAdapter):
 
 
 _OPENED = contextvars.ContextVar("opened")   # the CIP connections a client opened over its TCP connection
+
+
+class _Frames(EncapsulationMessageManager):
+    """cm-ethernetip's framing, with a whole frame too short for its command an error (the base would
+    wait for more bytes and leave the connection stalled)."""
+
+    def try_parse(self, data: bytes, remote_addr):
+        msg, consumed = super().try_parse(data, remote_addr)
+        if msg is None and consumed:
+            command = EncapsulationHeader.parse(data).command
+            raise ValueError(f"a {command.name} frame of {consumed} bytes is too short for its command")
+        return msg, consumed
+
+
+def _incorrect_data(msg) -> bytes:
+    """The answer to a request whose CIP path or data cannot be read."""
+    command = EncapsulationCommand.SEND_UNIT_DATA if isinstance(msg, SendUnitDataMessage) else \
+        EncapsulationCommand.SEND_RR_DATA
+    buf = bytearray(HEADER_SIZE)
+    EncapsulationHeader(command=command, session_handle=msg.session_handle, status=EncapsulationStatus.INCORRECT_DATA,
+                        sender_context=msg.sender_context).write_to(buf)
+    return bytes(buf)
 
 
 class _Polls:
@@ -130,7 +166,7 @@ class _Polls:
     async def read(self, n: int) -> bytes:
         chunk = await self.reader.read(n)
         if self.poll in chunk.lower() and self.image.between_scans():
-            await asyncio.get_running_loop().run_in_executor(None, self.image.hold)
+            await hold(self.image)
         return chunk
 
 
@@ -161,7 +197,7 @@ class _Tags(LogixDispatcher):
             return self._read(service, tag, data)
         if writing:
             return self._write(service, tag, where, data)
-        return CipServiceResponse.error(service, CipStatus.error(NOT_SUPPORTED))
+        return self._refuse(service, where, f"service 0x{service:02X} on a tag", NOT_SUPPORTED, access="a request to")
 
     def _read(self, service: int, tag: Tag, data: bytes) -> CipServiceResponse:
         fragmented = service == READ_FRAGMENTED
@@ -198,7 +234,7 @@ class _Tags(LogixDispatcher):
 
     def _refuse(self, service: int, where: str, why: str, status: int, extended: int | None = None,
                 access: str = "a write to") -> CipServiceResponse:
-        meaning = {PATH_UNKNOWN: "path destination unknown", INVALID_VALUE: "invalid attribute value",
+        meaning = {PATH_UNKNOWN: "path destination unknown", NOT_SUPPORTED: "service not supported", INVALID_VALUE: "invalid attribute value",
                    PRIVILEGE_VIOLATION: "privilege violation", NOT_ENOUGH_DATA: "not enough data",
                    GENERAL: f"general error, extended status 0x{extended or 0:04X}"}[status]
         self.image.refuse(where, f"0x{status:02X} {meaning}: {why}", access=access)

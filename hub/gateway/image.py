@@ -101,7 +101,8 @@ class ProcessImage:
         return self.holds and (self.at_scan is None or self.values["cycle_done"] == self.at_scan)
 
     def refuse(self, where: str, why: str, access: str = "a write to") -> None:
-        """A PLC's request the server refused (`access`: "a write to", or "a read of" a tag no one has)."""
+        """A PLC's request the server refused, logged as "refused {access} {where}: {why}" (`access`: "a
+        write to" a tag, "a read of" one, "a request" a server could not read…)."""
         with self._lock:
             self.refused += 1
         _log.warning("gateway: refused %s %s: %s", access, where, why)
