@@ -13,8 +13,9 @@ from concurrent.futures import ThreadPoolExecutor
 import pytest
 
 from hub.core.slots import SlotType
+from hub.gateway.enip import TYPES as LOGIX
 from hub.gateway.image import ProcessImage
-from hub.gateway.participant import LIVE, Gateway
+from hub.gateway.participant import LIVE, LOCKSTEP, Gateway
 from hub.gateway.server_thread import ServerThread
 from hub.gateway.tags import namespace, tag_map
 from hub.scenario.checker import load_scenario
@@ -46,8 +47,8 @@ READ = {   # a client printing the values of the tags P names, read in one reque
         from pylogix import PLC
         with PLC("127.0.0.1") as c:
             c.Port, c.SocketTimeout = P["port"], 60
-            names = P["names"]
-            print(*[r.Value for r in (c.Read(names) if len(names) > 1 else [c.Read(names[0])])])""",
+            known = [(name, 1, kind) for name, kind in zip(P["names"], P["types"])]   # no single reads to learn them
+            print(*[r.Value for r in (c.Read(known) if len(known) > 1 else [c.Read(*known[0])])])""",
     "opcua": """
         import asyncio
         from asyncua import Client, ua
@@ -119,6 +120,7 @@ def reader(protocol: str, tags, port: int, *slots: str) -> subprocess.Popen:
     """A client process reading these tags (`cycle` if none) in one request."""
     chosen = [tags.by_slot[slot] for slot in slots or ("cycle",)]
     params = {"port": port, "addresses": [t.address for t in chosen], "names": [t.name for t in chosen],
+              "types": [LOGIX[t.logix_type] for t in chosen],
               "s7": [({"I": "PE", "Q": "PA", "M": "MK"}[t.s7_area], t.s7_byte) for t in chosen],
               "endpoint": f"opc.tcp://127.0.0.1:{port}/planthub", "namespace": namespace(tags.run),
               "nodes": [t.node_id for t in chosen]}
@@ -191,6 +193,27 @@ def test_in_live_mode_a_poll_is_answered_at_once(protocol, tags):
         assert answer(reader(protocol, tags, port, "cycle", "r1_read")) == [0, 1] and image.held_reads == 0
 
 
+def test_an_opcua_wake_run_after_its_scan_was_answered_leaves_a_held_poll_for_the_next(tags):
+    image, port = ProcessImage(tags, lockstep=True, hold=HOLD), free_port()
+    with ServerThread(server_of("opcua", image, port), "opcua") as server, \
+            Plant(Gateway(tags, server, plc_timeout=LIMIT)) as plant:
+        first = plant.step()
+        plant.answer(1)
+        first.result(LIMIT)   # the plant steps toward scan 2
+        client = reader("opcua", tags, port)
+        until_held(image, client)
+
+        async def late_wake():   # scan 1's wake, run by the loop only now (and then at once the count of the held)
+            server.protocol._go_on()
+            return len(server.protocol.waiting)
+
+        assert server.call(late_wake()) == 1 and client.poll() is None
+        second = plant.step()
+        assert answer(client) == [2]
+        plant.answer(2)
+        second.result(LIMIT)
+
+
 @pytest.mark.parametrize("protocol", ["modbus", "s7", "enip", "opcua"])
 def test_a_poll_held_when_the_run_ends_is_answered_then(protocol, tags):
     image, port = ProcessImage(tags, lockstep=True, hold=HOLD), free_port()
@@ -209,3 +232,15 @@ def test_a_hold_ends_at_its_limit(tags):
     image = ProcessImage(tags, lockstep=True, hold=0.05)
     image.hold()   # no scan yet: held for its limit, then answered
     assert image.held_reads == 1
+
+
+@pytest.mark.parametrize("mode, lockstep, image", [(LIVE, True, "holds"), (LOCKSTEP, False, "never holds")])
+def test_a_gateway_on_an_image_of_the_other_mode_is_refused_saying_which_image_it_needs(tags, mode, lockstep, image):
+    server = ServerThread(server_of("modbus", ProcessImage(tags, lockstep=lockstep), free_port()), "modbus")   # not started
+    try:
+        with pytest.raises(ValueError) as refused:
+            Gateway(tags, server, mode=mode)
+    finally:
+        server.loop.close()
+    assert str(refused.value) == (f"a {mode} gateway on a process image that {image} reads of cycle: "
+                                  f"ProcessImage(tags, lockstep={not lockstep})")

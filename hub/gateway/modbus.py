@@ -22,6 +22,7 @@ from pymodbus.simulator import DataType, SimData, SimDevice
 
 from hub.core.slots import SlotType
 from hub.gateway.image import ProcessImage
+from hub.gateway.server_thread import hold
 from hub.gateway.tags import BITS, Tag
 
 _TABLES = ("coil", "discrete_input", "holding_register", "input_register")   # SimDevice's order
@@ -78,9 +79,7 @@ class ModbusServer:
                     if t.address < address + len(values) and address < t.address + t.count]
             return self._write(table, address, values, tags)
         if self.cycle in self._overlapping(table, address, count) and self.image.between_scans():
-            # lockstep: held while the plant steps to its next scan (hub/gateway/image.py), in a thread
-            # of the loop's pool, so that the loop goes on serving other clients meanwhile
-            await asyncio.get_running_loop().run_in_executor(None, self.image.hold)
+            await hold(self.image)   # lockstep: held while the plant steps to its next scan (image.py)
         for tag in self.by_table.get(table, ()) if bits else self._overlapping(table, address, count):
             words = _encode(tag, self.image.read(tag.slot))   # fresh from the image
             if bits:

@@ -112,7 +112,11 @@ class OpcUaServer:
             tag = self.image.tags.by_slot[slot]
             await self.server.write_attribute_value(self.nodes[slot], ua.DataValue(ua.Variant(value, _VARIANT[tag.opcua_type])))
 
-    def _go_on(self) -> None:
+    def _go_on(self, stopping: bool = False) -> None:
+        """The held reads go on: their scan began, or the run ended (or the server stops). A wake the loop
+        runs late, when the PLC has answered that scan already, leaves them held for the next."""
+        if self.image.between_scans() and not stopping:
+            return
         waiting, self.waiting = self.waiting, []
         for future in waiting:
             if not future.done():
@@ -139,7 +143,7 @@ class OpcUaServer:
         if self._wake is not None:
             self.image.unlisten(self._wake)
             self._wake = None
-        self._go_on()   # a read held for a next scan is answered now
+        self._go_on(stopping=True)   # a read held for a next scan is answered now
         if self.server is not None:
             await self.server.stop()
             self.server = None

@@ -1,4 +1,5 @@
-"""The gateway participant: a scenario's participant object served to a PLC over OPC UA or Modbus TCP.
+"""The gateway participant: a scenario's participant object served to a PLC over OPC UA, Modbus TCP,
+S7 or EtherNet/IP.
 
 At every step the plant's values go into the process image (an event adds one to its counter) and
 to the server; then, in *lockstep*, at every scan (every step, or the first step at or after each

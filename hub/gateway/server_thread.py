@@ -1,5 +1,5 @@
-"""A protocol server (OPC UA, Modbus) in its own thread with its own asyncio event loop: the plant's
-steps call into it with a limit on every wait, and it is stopped with the gateway."""
+"""A protocol server (OPC UA, Modbus, S7, EtherNet/IP) in its own thread with its own asyncio event
+loop: the plant's steps call into it with a limit on every wait, and it is stopped with the gateway."""
 from __future__ import annotations
 
 import asyncio
@@ -8,6 +8,7 @@ import socket
 import threading
 
 from hub.core.errors import PlanthubError
+from hub.gateway.image import ProcessImage
 
 START_LIMIT = 20.0   # s for a server to bind its endpoint and build its address space
 CALL_LIMIT = 5.0     # s for anything else asked of it
@@ -22,6 +23,12 @@ def refuse_taken(host: str, port: int, failed: str) -> None:
             probe.bind((host, port))
         except OSError as exc:
             raise PlanthubError(f"{failed}: {exc.strerror or exc} (another gateway or server holds the port?)") from None
+
+
+async def hold(image: ProcessImage) -> None:
+    """A PLC's read of `cycle` held (`ProcessImage.hold`) in a thread of the running loop's pool: the
+    loop goes on serving other clients meanwhile."""
+    await asyncio.get_running_loop().run_in_executor(None, image.hold)
 
 
 class ServerThread:
@@ -62,7 +69,7 @@ class ServerThread:
             return
         if asyncio.iscoroutinefunction(self.protocol.publish):
             self.call(self.protocol.publish(changed), doing="publish the plant's values")
-        else:   # no hop into the loop and back: it cost 0.2-0.6 ms a scan while the loop served the PLC's polls
+        else:   # no hop into the loop and back, which waits on the loop while it serves the PLC's polls
             self.protocol.publish(changed)
 
     def close(self) -> None:
