@@ -127,7 +127,11 @@ with socket.create_connection(("127.0.0.1", PORT), timeout=10) as s:
                      ("a segment cut short", bytes([0x4C, 1, 0x21, 0, 1, 0])),   # a 16-bit class id of no bytes
                      ("a Forward Open cut short", bytes([0x54, 2, 0x20, 0x06, 0x24, 0x01, 0, 0, 0, 0])),
                      ("another service on a tag", bytes([0x0E, 4, 0x91, 5]) + b"cycle\x00"),
-                     ("then a good read", bytes([0x4C, 4, 0x91, 5]) + b"cycle\x00" + bytes([1, 0]))]:
+                     ("then a good read", bytes([0x4C, 4, 0x91, 5]) + b"cycle\x00" + bytes([1, 0])),
+                     ("a packet of a good read and a bad one", bytes([0x0A, 2, 0x20, 0x02, 0x24, 0x01, 2, 0, 6, 0, 18, 0])
+                      + bytes([0x4C, 4, 0x91, 5]) + b"cycle\x00" + bytes([1, 0, 0x4C, 3, 0x91, 4]) + b"sped" + bytes([1, 0])),
+                     ("a packet of two good reads", bytes([0x0A, 2, 0x20, 0x02, 0x24, 0x01, 2, 0, 6, 0, 18, 0])
+                      + (bytes([0x4C, 4, 0x91, 5]) + b"cycle\x00" + bytes([1, 0])) * 2)]:
         s.sendall(frame(0x6F, unconnected(mr), handle))
         said[what] = answer(s)
     s.sendall(frame(0x6F, b"\x00\x00", handle))
@@ -139,7 +143,7 @@ print(repr(said))
 """
 
 
-def test_requests_and_frames_the_enip_server_cannot_read_are_answered_or_closed_and_logged(tmp_path, caplog):
+def test_raw_requests_get_a_controllers_answers_and_those_it_cannot_read_are_refused_and_logged(tmp_path, caplog):
     tags = tag_map(load_scenario(belt_scenario(tmp_path)), "plc")
     image, port = ProcessImage(tags), free_port()
     with ServerThread(EnipServer(image, f"127.0.0.1:{port}"), "enip"):
@@ -149,8 +153,11 @@ def test_requests_and_frames_the_enip_server_cannot_read_are_answered_or_closed_
     assert eval(proc.stdout) == {
         "a name not ASCII": (3, ""), "a segment cut short": (3, ""), "a Forward Open cut short": (3, ""),   # incorrect data
         "another service on a tag": (0, "8e000800"),   # the connection goes on: CIP's 0x08 service not supported
-        "then a good read": (0, "cc000000c40000000000"), "a frame too short": "closed", "a command no one has": "closed"}
-    assert image.refused == 6 and image.outputs() == {"speed": 0.0, "run": False}
+        "then a good read": (0, "cc000000c40000000000"),
+        "a packet of a good read and a bad one": (0, "8a001e00" "0200" "0600" "1000" "cc000000c40000000000" "cc000500"),
+        "a packet of two good reads": (0, "8a000000" "0200" "0600" "1000" + "cc000000c40000000000" * 2),
+        "a frame too short": "closed", "a command no one has": "closed"}
+    assert image.refused == 7 and image.outputs() == {"speed": 0.0, "run": False}
     logged = caplog.text
     for line in ["a request (EtherNet/IP): encapsulation status 0x0003 incorrect data: 'ascii' codec can't decode byte 0xe9",
                  "a request (EtherNet/IP): encapsulation status 0x0003 incorrect data: unpack_from requires a buffer",

@@ -9,7 +9,8 @@ PLC input 0x0F "privilege violation"; a value out of the tag's range, not finite
 long or not UTF-8 0x09 "invalid attribute value"; a value of another type 0xFF with extended status
 0x2107, more than one element 0xFF 0x2105, too few bytes 0x13 "not enough data". A tag no one has
 is 0x05 "path destination unknown" for a read as for a write, another service on a tag 0x08 "service
-not supported". A request whose path or data cannot be read (a name not ASCII, a segment cut short, a
+not supported". A Multiple Service Packet in which a service failed is answered with 0x1E "embedded
+service error" and every service's own answer. A request whose path or data cannot be read (a name not ASCII, a segment cut short, a
 Forward Open cut short) is answered with the encapsulation status 0x0003 "incorrect data", and a frame
 that cannot be read closes its connection. Every refusal is logged, and nothing of it reaches the
 plant. An SSTRING's bytes are the string's UTF-8, both ways.
@@ -27,6 +28,7 @@ from __future__ import annotations
 
 import asyncio
 import contextvars
+import dataclasses
 import math
 import struct
 
@@ -46,9 +48,9 @@ from hub.gateway.image import ProcessImage
 from hub.gateway.server_thread import hold, refuse_taken
 from hub.gateway.tags import OUTPUT, Tag
 
-READ, WRITE, READ_FRAGMENTED, WRITE_FRAGMENTED = 0x4C, 0x4D, 0x52, 0x53
-PATH_UNKNOWN, NOT_SUPPORTED, INVALID_VALUE, PRIVILEGE_VIOLATION, NOT_ENOUGH_DATA, GENERAL = \
-    0x05, 0x08, 0x09, 0x0F, 0x13, 0xFF
+READ, WRITE, READ_FRAGMENTED, WRITE_FRAGMENTED, MULTIPLE = 0x4C, 0x4D, 0x52, 0x53, 0x0A
+PATH_UNKNOWN, NOT_SUPPORTED, INVALID_VALUE, PRIVILEGE_VIOLATION, NOT_ENOUGH_DATA, EMBEDDED_ERROR, GENERAL = \
+    0x05, 0x08, 0x09, 0x0F, 0x13, 0x1E, 0xFF
 WRONG_TYPE, WRONG_SIZE = 0x2107, 0x2105   # extended status of GENERAL, as a ControlLogix answers
 TYPES = {"BOOL": 0xC1, "DINT": 0xC4, "REAL": 0xCA, "SSTRING": 0xDA}
 NAMES = {code: name for name, code in TYPES.items()}
@@ -181,6 +183,13 @@ class _Tags(LogixDispatcher):
         self.connections.dispatch_request = self.dispatch
         self.register_class(self.connections.cip_class)
 
+    def dispatch(self, service: int, path: CipPath, data: bytes) -> CipServiceResponse:
+        response = super().dispatch(service, path, data)
+        if service == MULTIPLE and response.status.is_success and _any_failed(response.data):
+            # as a ControlLogix answers a Multiple Service Packet: "embedded service error", each answer its own
+            return dataclasses.replace(response, status=CipStatus.error(EMBEDDED_ERROR))
+        return response
+
     def on_unhandled(self, service: int, path: CipPath, data: bytes, default_status: int = PATH_UNKNOWN):
         if path.symbolic_name is None:
             return super().on_unhandled(service, path, data, default_status)
@@ -240,6 +249,12 @@ class _Tags(LogixDispatcher):
         self.image.refuse(where, f"0x{status:02X} {meaning}: {why}", access=access)
         codes = (status,) if extended is None else (status, extended)
         return CipServiceResponse.error(service, CipStatus.error(*codes))
+
+
+def _any_failed(answers: bytes) -> bool:
+    """Whether an answer of a Multiple Service Packet (a count, the offsets, the answers) holds a failed one."""
+    (count,) = struct.unpack_from("<H", answers)
+    return any(answers[offset + 2] for offset in struct.unpack_from(f"<{count}H", answers, 2))
 
 
 def _encode(tag: Tag, value) -> bytes:
