@@ -10,10 +10,10 @@ long or not UTF-8 0x09 "invalid attribute value"; a value of another type 0xFF w
 0x2107, more than one element 0xFF 0x2105, too few bytes 0x13 "not enough data". A tag no one has
 is 0x05 "path destination unknown" for a read as for a write, another service on a tag 0x08 "service
 not supported". A Multiple Service Packet in which a service failed is answered with 0x1E "embedded
-service error" and every service's own answer. A request whose path or data cannot be read (a name not ASCII, a segment cut short, a
-Forward Open cut short) is answered with the encapsulation status 0x0003 "incorrect data", and a frame
-that cannot be read closes its connection. Every refusal is logged, and nothing of it reaches the
-plant. An SSTRING's bytes are the string's UTF-8, both ways.
+service error" and every service's own answer. A request whose path or data cannot be read (a name
+not ASCII, a segment cut short, a Forward Open cut short) is answered with the encapsulation status
+0x0003 "incorrect data", and a frame that cannot be read closes its connection. Every refusal is
+logged, and nothing of it reaches the plant. An SSTRING's bytes are the string's UTF-8, both ways.
 
 In lockstep a request naming `cycle` between two scans is held until the next begins (`image.py`), in
 a thread of the loop's pool while the loop answers other clients: every tag of it is then read from
@@ -243,8 +243,8 @@ class _Tags(LogixDispatcher):
 
     def _refuse(self, service: int, where: str, why: str, status: int, extended: int | None = None,
                 access: str = "a write to") -> CipServiceResponse:
-        meaning = {PATH_UNKNOWN: "path destination unknown", NOT_SUPPORTED: "service not supported", INVALID_VALUE: "invalid attribute value",
-                   PRIVILEGE_VIOLATION: "privilege violation", NOT_ENOUGH_DATA: "not enough data",
+        meaning = {PATH_UNKNOWN: "path destination unknown", NOT_SUPPORTED: "service not supported",
+                   INVALID_VALUE: "invalid attribute value", PRIVILEGE_VIOLATION: "privilege violation", NOT_ENOUGH_DATA: "not enough data",
                    GENERAL: f"general error, extended status 0x{extended or 0:04X}"}[status]
         self.image.refuse(where, f"0x{status:02X} {meaning}: {why}", access=access)
         codes = (status,) if extended is None else (status, extended)
