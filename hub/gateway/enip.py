@@ -244,7 +244,8 @@ class _Tags(LogixDispatcher):
     def _refuse(self, service: int, where: str, why: str, status: int, extended: int | None = None,
                 access: str = "a write to") -> CipServiceResponse:
         meaning = {PATH_UNKNOWN: "path destination unknown", NOT_SUPPORTED: "service not supported",
-                   INVALID_VALUE: "invalid attribute value", PRIVILEGE_VIOLATION: "privilege violation", NOT_ENOUGH_DATA: "not enough data",
+                   INVALID_VALUE: "invalid attribute value", PRIVILEGE_VIOLATION: "privilege violation",
+                   NOT_ENOUGH_DATA: "not enough data",
                    GENERAL: f"general error, extended status 0x{extended or 0:04X}"}[status]
         self.image.refuse(where, f"0x{status:02X} {meaning}: {why}", access=access)
         codes = (status,) if extended is None else (status, extended)
