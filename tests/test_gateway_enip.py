@@ -3,6 +3,7 @@ another process (a real server), every kind of bad request refused with CIP's ow
 logged, nothing of it reaching the plant, strings in UTF-8 both ways; a taken port refused naming
 it; and the bottling plant routed by a Logix PLC client scanning every 0.1 s (at every step:
 tests/test_gateway_plant.py)."""
+import re
 import socket
 import subprocess
 import sys
@@ -105,11 +106,14 @@ def test_bad_logix_writes_get_their_cip_status_and_nothing_reaches_the_plant(tmp
 UNREADABLE = r"""
 import socket, struct
 
-def frame(command, payload, session=0):
-    return struct.pack("<HHIIQI", command, len(payload), session, 0, 7, 0) + payload
+def frame(command, payload, session=0, status=0):
+    return struct.pack("<HHIIQI", command, len(payload), session, status, 7, 0) + payload
 
 def unconnected(mr):   # SendRRData's interface, timeout and two items: a null address and the request
     return struct.pack("<IHHHHHH", 0, 0, 2, 0, 0, 0xB2, len(mr)) + mr
+
+def connected(connection, mr):   # SendUnitData's: a connected address and the sequence count, then the request
+    return struct.pack("<IHHHHIHHH", 0, 0, 2, 0xA1, 4, connection, 0xB1, len(mr) + 2, 1) + mr
 
 def answer(s):
     head = s.recv(24, socket.MSG_WAITALL)
@@ -119,26 +123,31 @@ def answer(s):
     body = s.recv(length, socket.MSG_WAITALL)
     return status, body[16:].hex()   # the Message Router's answer, after the items' headers
 
+READ = bytes([0x4C, 4, 0x91, 5]) + b"cycle\x00" + bytes([1, 0])
+PACKET = bytes([0x0A, 2, 0x20, 0x02, 0x24, 0x01])   # a Multiple Service Packet to the Message Router
 said = {}
 with socket.create_connection(("127.0.0.1", PORT), timeout=10) as s:
     s.sendall(frame(0x65, struct.pack("<HH", 1, 0)))   # RegisterSession
     handle = struct.unpack_from("<I", s.recv(28, socket.MSG_WAITALL), 4)[0]
-    for what, mr in [("a name not ASCII", bytes([0x4C, 2, 0x91, 2, 0xE9, 0x78, 1, 0])),
-                     ("a segment cut short", bytes([0x4C, 1, 0x21, 0, 1, 0])),   # a 16-bit class id of no bytes
-                     ("a Forward Open cut short", bytes([0x54, 2, 0x20, 0x06, 0x24, 0x01, 0, 0, 0, 0])),
-                     ("another service on a tag", bytes([0x0E, 4, 0x91, 5]) + b"cycle\x00"),
-                     ("then a good read", bytes([0x4C, 4, 0x91, 5]) + b"cycle\x00" + bytes([1, 0])),
-                     ("a packet of a good read and a bad one", bytes([0x0A, 2, 0x20, 0x02, 0x24, 0x01, 2, 0, 6, 0, 18, 0])
-                      + bytes([0x4C, 4, 0x91, 5]) + b"cycle\x00" + bytes([1, 0, 0x4C, 3, 0x91, 4]) + b"sped" + bytes([1, 0])),
-                     ("a packet of two good reads", bytes([0x0A, 2, 0x20, 0x02, 0x24, 0x01, 2, 0, 6, 0, 18, 0])
-                      + (bytes([0x4C, 4, 0x91, 5]) + b"cycle\x00" + bytes([1, 0])) * 2)]:
-        s.sendall(frame(0x6F, unconnected(mr), handle))
+    for what, command, payload in [
+            ("a name not ASCII", 0x6F, unconnected(bytes([0x4C, 2, 0x91, 2, 0xE9, 0x78, 1, 0]))),
+            ("a segment cut short", 0x6F, unconnected(bytes([0x4C, 1, 0x21, 0, 1, 0]))),   # a 16-bit class id of no bytes
+            ("a Forward Open cut short", 0x6F, unconnected(bytes([0x54, 2, 0x20, 0x06, 0x24, 0x01, 0, 0, 0, 0]))),
+            ("a Forward Close cut short", 0x6F, unconnected(bytes([0x4E, 2, 0x20, 0x06, 0x24, 0x01, 0, 0]))),
+            ("a name of no characters", 0x6F, unconnected(bytes([0x4C, 1, 0x91, 0, 1, 0]))),
+            ("another service on a tag", 0x6F, unconnected(bytes([0x0E, 4, 0x91, 5]) + b"cycle\x00")),
+            ("a packet of a good read and a bad one", 0x6F, unconnected(
+                PACKET + bytes([2, 0, 6, 0, 18, 0]) + READ + bytes([0x4C, 3, 0x91, 4]) + b"sped" + bytes([1, 0]))),
+            ("a packet of two good reads", 0x6F, unconnected(PACKET + bytes([2, 0, 6, 0, 18, 0]) + READ * 2)),
+            ("a packet whose second offset is past its end", 0x6F, unconnected(PACKET + bytes([2, 0, 6, 0, 200, 0]) + READ)),
+            ("a connected read on no connection", 0x70, connected(0x12345678, READ)),
+            ("a frame whose items cannot be read", 0x6F, b"\x00\x00"),
+            ("a command no one has", 0x9999, b""),
+            ("then a good read", 0x6F, unconnected(READ))]:
+        s.sendall(frame(command, payload, handle))
         said[what] = answer(s)
-    s.sendall(frame(0x6F, b"\x00\x00", handle))
-    said["a frame too short"] = answer(s)
-with socket.create_connection(("127.0.0.1", PORT), timeout=10) as s:
-    s.sendall(frame(0x9999, b""))
-    said["a command no one has"] = answer(s)
+    s.sendall(frame(0x6F, unconnected(READ), handle, status=0x42) + frame(0x6F, unconnected(READ), handle))
+    said["a request with a status, then a good read"] = answer(s)   # the first is not answered
 print(repr(said))
 """
 
@@ -150,22 +159,39 @@ def test_raw_requests_get_a_controllers_answers_and_those_it_cannot_read_are_ref
         proc = subprocess.run([sys.executable, "-c", UNREADABLE.replace("PORT", str(port))],
                               capture_output=True, text=True, cwd=ROOT, timeout=60)
     assert proc.returncode == 0, proc.stderr[-2000:]
-    assert eval(proc.stdout) == {
+    read = "cc000000c40000000000"   # cycle: a DINT, 0
+    assert eval(proc.stdout) == {   # one connection, which goes on through all of them
         "a name not ASCII": (3, ""), "a segment cut short": (3, ""), "a Forward Open cut short": (3, ""),   # incorrect data
-        "another service on a tag": (0, "8e000800"),   # the connection goes on: CIP's 0x08 service not supported
-        "then a good read": (0, "cc000000c40000000000"),
-        "a packet of a good read and a bad one": (0, "8a001e00" "0200" "0600" "1000" "cc000000c40000000000" "cc000500"),
-        "a packet of two good reads": (0, "8a000000" "0200" "0600" "1000" + "cc000000c40000000000" * 2),
-        "a frame too short": "closed", "a command no one has": "closed"}
-    assert image.refused == 7 and image.outputs() == {"speed": 0.0, "run": False}
-    logged = caplog.text
-    for line in ["a request (EtherNet/IP): encapsulation status 0x0003 incorrect data: 'ascii' codec can't decode byte 0xe9",
-                 "a request (EtherNet/IP): encapsulation status 0x0003 incorrect data: unpack_from requires a buffer",
-                 "a request (EtherNet/IP): encapsulation status 0x0003 incorrect data: Forward Open requires at least 36 bytes",
-                 "a request to cycle (EtherNet/IP): 0x08 service not supported: service 0x0E on a tag",
-                 "a frame (EtherNet/IP): a SEND_RR_DATA frame of 26 bytes is too short for its command; its connection is closed",
-                 "a frame (EtherNet/IP): 39321 is not a valid EncapsulationCommand; its connection is closed"]:
-        assert f"gateway: refused {line}" in logged
+        "a Forward Close cut short": (0, "ce001300"),   # CIP's 0x13 not enough data
+        "a name of no characters": (0, "cc000400"),   # CIP's 0x04 path segment error
+        "another service on a tag": (0, "8e000800"),   # CIP's 0x08 service not supported
+        "a packet of a good read and a bad one": (0, "8a001e00" "0200" "0600" "1000" + read + "cc000500"),
+        "a packet of two good reads": (0, "8a000000" "0200" "0600" "1000" + read * 2),
+        "a packet whose second offset is past its end": (0, "8a001e00" "0200" "0600" "1000" + read + "80000400"),
+        "a connected read on no connection": (0, "b1000800" "0100" "cc0001010701"),   # its count, then 0x01/0x0107
+        "a frame whose items cannot be read": (3, ""), "a command no one has": (1, ""),   # invalid command
+        "then a good read": (0, read), "a request with a status, then a good read": (0, read)}
+    assert image.refused == 12 and image.outputs() == {"speed": 0.0, "run": False}
+    logged = re.sub(r"EtherNet/IP from 127\.0\.0\.1:\d+", "EtherNet/IP from the PLC", caplog.text)
+    for line in [
+            "a request (EtherNet/IP from the PLC): encapsulation status 0x0003 incorrect data: 'ascii' codec can't decode "
+            "byte 0xe9",
+            "a request (EtherNet/IP from the PLC): encapsulation status 0x0003 incorrect data: unpack_from requires a buffer",
+            "a request (EtherNet/IP from the PLC): encapsulation status 0x0003 incorrect data: Forward Open requires at "
+            "least 36 bytes",
+            "a request (EtherNet/IP): 0x13 not enough data: service 0x4E to class 0x06, instance 1",
+            "a request (EtherNet/IP): 0x04 path segment error: a symbolic segment of no characters",
+            "a request to cycle (EtherNet/IP): 0x08 service not supported: service 0x0E on a tag",
+            "a read of sped (EtherNet/IP): 0x05 path destination unknown: no such tag",
+            "a Multiple Service Packet (EtherNet/IP): 0x04 path segment error: 1 of its 2 services cannot be read",
+            "a connected request (EtherNet/IP from the PLC): 0x01 connection failure, extended status 0x0107: no "
+            "connection 0x12345678 was opened",
+            "a frame (EtherNet/IP from the PLC): a SEND_RR_DATA frame of 26 bytes cannot be read: its items cannot be "
+            "read (answered with encapsulation status 0x0003 incorrect data)",
+            "a frame (EtherNet/IP from the PLC): command 0x9999 is no EtherNet/IP command (answered with encapsulation "
+            "status 0x0001 invalid command)",
+            "a frame (EtherNet/IP from the PLC): a SEND_RR_DATA request's status is 0x00000042, not 0 (not answered)"]:
+        assert f"gateway: refused {line}" in logged, line
 
 
 GONE = """
