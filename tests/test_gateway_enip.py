@@ -140,6 +140,8 @@ with socket.create_connection(("127.0.0.1", PORT), timeout=10) as s:
                 PACKET + bytes([2, 0, 6, 0, 18, 0]) + READ + bytes([0x4C, 3, 0x91, 4]) + b"sped" + bytes([1, 0]))),
             ("a packet of two good reads", 0x6F, unconnected(PACKET + bytes([2, 0, 6, 0, 18, 0]) + READ * 2)),
             ("a packet whose second offset is past its end", 0x6F, unconnected(PACKET + bytes([2, 0, 6, 0, 200, 0]) + READ)),
+            ("a packet whose answers pass 4002 bytes", 0x6F, unconnected(   # 400 reads of cycle
+                PACKET + struct.pack("<H400H", 400, *range(802, 802 + 400 * len(READ), len(READ))) + READ * 400)),
             ("a connected read on no connection", 0x70, connected(0x12345678, READ)),
             ("a frame whose items cannot be read", 0x6F, b"\x00\x00"),
             ("a command no one has", 0x9999, b""),
@@ -168,10 +170,11 @@ def test_raw_requests_get_a_controllers_answers_and_those_it_cannot_read_are_ref
         "a packet of a good read and a bad one": (0, "8a001e00" "0200" "0600" "1000" + read + "cc000500"),
         "a packet of two good reads": (0, "8a000000" "0200" "0600" "1000" + read * 2),
         "a packet whose second offset is past its end": (0, "8a001e00" "0200" "0600" "1000" + read + "80000400"),
+        "a packet whose answers pass 4002 bytes": (0, "8a001100"),   # reply data too large
         "a connected read on no connection": (0, "b1000800" "0100" "cc0001010701"),   # its count, then 0x01/0x0107
         "a frame whose items cannot be read": (3, ""), "a command no one has": (1, ""),   # invalid command
         "then a good read": (0, read), "a request with a status, then a good read": (0, read)}
-    assert image.refused == 12 and image.outputs() == {"speed": 0.0, "run": False}
+    assert image.refused == 13 and image.outputs() == {"speed": 0.0, "run": False}
     logged = re.sub(r"EtherNet/IP from 127\.0\.0\.1:\d+", "EtherNet/IP from the PLC", caplog.text)
     for line in [
             "a request (EtherNet/IP from the PLC): encapsulation status 0x0003 incorrect data: 'ascii' codec can't decode "
@@ -184,6 +187,7 @@ def test_raw_requests_get_a_controllers_answers_and_those_it_cannot_read_are_ref
             "a request to cycle (EtherNet/IP): 0x08 service not supported: service 0x0E on a tag",
             "a read of sped (EtherNet/IP): 0x05 path destination unknown: no such tag",
             "a Multiple Service Packet (EtherNet/IP): 0x04 path segment error: 1 of its 2 services cannot be read",
+            "a Multiple Service Packet (EtherNet/IP): 0x11 reply data too large: 4802 bytes of answers, more than 4002",
             "a connected request (EtherNet/IP from the PLC): 0x01 connection failure, extended status 0x0107: no "
             "connection 0x12345678 was opened",
             "a frame (EtherNet/IP from the PLC): a SEND_RR_DATA frame of 26 bytes cannot be read: its items cannot be "

@@ -25,8 +25,8 @@ a thread of the loop's pool while the loop answers other clients: every tag of i
 that scan.
 
 cm-ethernetip is a pure-Python asyncio server that frames with `struct`: it answers pylogix's read of
-six tags in 0.3 ms, where cpppo, the other one, took 12-17 ms (its parser reads byte by byte) and
-made a lockstep PLC's scan cost the plant 2.8 times the routing participant. pycomm3 and pylogix are
+six tags in 0.3 ms, where cpppo, the other one, took 12-17 ms (its parser reads byte by byte): the
+bottling plant routed at every step by a Logix PLC took 2.8 times the routing participant's wall time. pycomm3 and pylogix are
 clients only. Its Connection Manager, Message Router and encapsulation are used as they are; the Logix tags
 are this file's (`_Tags`).
 """
